@@ -1,0 +1,338 @@
+#include "api/scene.h"
+
+#include <string>
+
+#include "core/error.h"
+
+namespace sg {
+
+Scene::Scene() : m_accel(new Accel) {
+  ParamSet p;
+  p.set("albedo", 0.5);
+  m_default_material = create_material("diffuse", p, [](uint32_t) { return nullptr; }, "default material");
+}
+
+Scene::~Scene() = default;
+
+template <class T>
+T& Scene::get_slot(std::vector<std::optional<T>>& v, uint32_t id, const char* what) {
+  if (id >= v.size() || !v[id]) throw Error(std::string(what) + " " + std::to_string(id) + " does not exist");
+  return *v[id];
+}
+template <class T>
+const T& Scene::get_slot(const std::vector<std::optional<T>>& v, uint32_t id, const char* what) {
+  if (id >= v.size() || !v[id]) throw Error(std::string(what) + " " + std::to_string(id) + " does not exist");
+  return *v[id];
+}
+
+static Bounds3 mesh_bounds(const TriangleMesh& m) {
+  Bounds3 b;
+  for (const auto& p : m.positions) b.expand(p);
+  return b;
+}
+
+// Meshes -------------------------------------------------------------------------------
+
+uint32_t Scene::add_mesh(TriangleMesh mesh) {
+  uint32_t id = uint32_t(m_meshes.size());
+  mesh.validate(mesh.name.empty() ? "mesh " + std::to_string(id) : "mesh '" + mesh.name + "'");
+  for (int32_t mid : mesh.material_ids)
+    if (mid >= 0) check_material_id(mid, "mesh material_ids");
+  MeshEntry e;
+  e.bounds = mesh_bounds(mesh);
+  e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
+  m_meshes.emplace_back(std::move(e));
+  return id;
+}
+
+void Scene::update_mesh(uint32_t id, TriangleMesh mesh) {
+  MeshEntry& e = get_slot(m_meshes, id, "mesh");
+  mesh.validate(mesh.name.empty() ? "mesh " + std::to_string(id) : "mesh '" + mesh.name + "'");
+  for (int32_t mid : mesh.material_ids)
+    if (mid >= 0) check_material_id(mid, "mesh material_ids");
+  e.bounds = mesh_bounds(mesh);
+  e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
+  e.dirty = true;
+  m_structure_dirty = true;
+}
+
+void Scene::remove_mesh(uint32_t id) {
+  get_slot(m_meshes, id, "mesh");
+  for (size_t i = 0; i < m_instances.size(); ++i)
+    if (m_instances[i] && m_instances[i]->mesh_id == id)
+      throw Error("mesh " + std::to_string(id) + " is still used by instance " + std::to_string(i));
+  m_accel->release_mesh(id);
+  m_meshes[id].reset();
+  m_structure_dirty = true;
+}
+
+const TriangleMesh& Scene::mesh(uint32_t id) const { return *get_slot(m_meshes, id, "mesh").mesh; }
+
+// Textures and materials ---------------------------------------------------------------
+
+uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
+  uint32_t id = uint32_t(m_textures.size());
+  auto t = create_texture(type, params, "texture " + std::to_string(id));
+  m_textures.emplace_back(TextureEntry{type, params, t});
+  return id;
+}
+
+uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
+  uint32_t id = uint32_t(m_materials.size());
+  auto lookup = [this](uint32_t tid) -> std::shared_ptr<Texture> {
+    return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
+  };
+  auto m = create_material(type, params, lookup, "material " + std::to_string(id));
+  m_materials.emplace_back(MaterialEntry{type, params, m});
+  m_structure_dirty = true;
+  return id;
+}
+
+void Scene::update_material(uint32_t id, const std::string& type, const ParamSet& params) {
+  MaterialEntry& e = get_slot(m_materials, id, "material");
+  auto lookup = [this](uint32_t tid) -> std::shared_ptr<Texture> {
+    return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
+  };
+  e.object = create_material(type, params, lookup, "material " + std::to_string(id));
+  e.type = type;
+  e.params = params;
+  m_structure_dirty = true;
+}
+
+void Scene::check_material_id(int64_t id, const char* context) const {
+  if (id < 0) return;
+  if (size_t(id) >= m_materials.size() || !m_materials[size_t(id)])
+    throw Error(std::string(context) + ": material " + std::to_string(id) + " does not exist");
+}
+
+// Instances ----------------------------------------------------------------------------
+
+uint32_t Scene::add_instance(uint32_t mesh_id, const Transform& world_from_object, uint32_t class_id,
+                             std::optional<uint32_t> instance_id, int64_t material_id) {
+  get_slot(m_meshes, mesh_id, "mesh");
+  check_material_id(material_id, "add_instance");
+  uint32_t id = uint32_t(m_instances.size());
+  InstanceEntry e;
+  e.mesh_id = mesh_id;
+  e.world_from_object = world_from_object;
+  e.class_id = class_id;
+  e.instance_id = instance_id ? *instance_id : id + 1;
+  e.material_id = material_id;
+  m_instances.emplace_back(e);
+  m_structure_dirty = true;
+  return id;
+}
+
+void Scene::set_instance_transform(uint32_t id, const Transform& t) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  e.world_from_object = t;
+  e.dirty = true;
+  m_structure_dirty = true;
+}
+
+void Scene::set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instance_id) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  e.class_id = class_id;
+  e.instance_id = instance_id;
+  m_structure_dirty = true;
+}
+
+void Scene::set_instance_material(uint32_t id, int64_t material_id) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  check_material_id(material_id, "set_instance_material");
+  e.material_id = material_id;
+  m_structure_dirty = true;
+}
+
+void Scene::remove_instance(uint32_t id) {
+  get_slot(m_instances, id, "instance");
+  m_instances[id].reset();
+  m_removed_instances.push_back(id);
+  m_structure_dirty = true;
+}
+
+size_t Scene::instance_count() const {
+  size_t n = 0;
+  for (const auto& i : m_instances) n += i.has_value();
+  return n;
+}
+
+// Lights and camera --------------------------------------------------------------------
+
+uint32_t Scene::add_light(const std::string& type, const ParamSet& params) {
+  uint32_t id = uint32_t(m_lights.size());
+  auto l = create_light(type, params, "light " + std::to_string(id));
+  m_lights.emplace_back(LightEntry{type, params, l});
+  m_structure_dirty = true;
+  return id;
+}
+
+void Scene::update_light(uint32_t id, const std::string& type, const ParamSet& params) {
+  LightEntry& e = get_slot(m_lights, id, "light");
+  e.object = create_light(type, params, "light " + std::to_string(id));
+  e.type = type;
+  e.params = params;
+  m_structure_dirty = true;
+}
+
+void Scene::remove_light(uint32_t id) {
+  get_slot(m_lights, id, "light");
+  m_lights[id].reset();
+  m_structure_dirty = true;
+}
+
+void Scene::set_camera(const PinholeCamera& camera) {
+  camera.validate();
+  m_camera = camera;
+  m_camera_set = true;
+}
+
+void Scene::restore_slot_counts(size_t meshes, size_t textures, size_t materials, size_t instances, size_t lights) {
+  m_meshes.resize(std::max(m_meshes.size(), meshes));
+  m_textures.resize(std::max(m_textures.size(), textures));
+  m_materials.resize(std::max(m_materials.size(), materials));
+  m_instances.resize(std::max(m_instances.size(), instances));
+  m_lights.resize(std::max(m_lights.size(), lights));
+}
+
+// Commit -------------------------------------------------------------------------------
+
+bool Scene::has_pending_edits() const { return m_structure_dirty || !m_removed_instances.empty(); }
+
+void Scene::commit() {
+  uint64_t builds_before = m_accel->mesh_builds();
+  bool top_dirty = !m_removed_instances.empty();
+  // 1. Bottom-level BVHs: only new or edited meshes.
+  for (size_t i = 0; i < m_meshes.size(); ++i) {
+    auto& e = m_meshes[i];
+    if (!e || !e->dirty) continue;
+    m_accel->build_mesh(uint32_t(i), *e->mesh);
+    e->dirty = false;
+    top_dirty = true;
+  }
+  // 2. Top level: removed and edited instances.
+  for (uint32_t id : m_removed_instances) m_accel->remove_instance(id);
+  m_removed_instances.clear();
+  for (size_t i = 0; i < m_instances.size(); ++i) {
+    auto& e = m_instances[i];
+    if (!e || !e->dirty) continue;
+    m_accel->set_instance(uint32_t(i), e->mesh_id, e->world_from_object);
+    e->dirty = false;
+    top_dirty = true;
+  }
+  if (top_dirty) m_accel->commit();
+  // 3. Records, materials and lights (cheap; no BVH work).
+  if (m_structure_dirty || top_dirty) build_render_scene();
+  m_structure_dirty = false;
+  m_stats.mesh_bvh_builds = m_accel->mesh_builds();
+  m_stats.mesh_bvh_builds_last = m_accel->mesh_builds() - builds_before;
+  m_stats.top_level_builds = m_accel->top_level_builds();
+  ++m_stats.commits;
+}
+
+void Scene::build_render_scene() {
+  RenderScene& rs = m_render_scene;
+  rs.accel = m_accel.get();
+  rs.instances.assign(m_instances.size(), InstanceRecord{});
+  rs.lights.clear();
+  rs.infinite_lights.clear();
+  m_area_lights.clear();
+  rs.bounds = Bounds3{};
+
+  // Per-triangle material pointers of each mesh.
+  for (auto& e : m_meshes) {
+    if (!e) continue;
+    e->triangle_materials.clear();
+    if (e->mesh->material_ids.empty()) continue;
+    e->triangle_materials.resize(e->mesh->triangle_count(), nullptr);
+    for (size_t t = 0; t < e->mesh->triangle_count(); ++t) {
+      int32_t mid = e->mesh->material_ids[t];
+      if (mid < 0) continue;
+      check_material_id(mid, "mesh material_ids");
+      e->triangle_materials[t] = m_materials[size_t(mid)]->object.get();
+    }
+  }
+
+  for (size_t i = 0; i < m_instances.size(); ++i) {
+    const auto& e = m_instances[i];
+    if (!e) continue;
+    const MeshEntry& me = *m_meshes[e->mesh_id];
+    InstanceRecord& r = rs.instances[i];
+    r.active = true;
+    r.mesh = me.mesh.get();
+    r.world_from_object = e->world_from_object;
+    r.class_id = e->class_id;
+    r.instance_id = e->instance_id;
+    r.override_material = e->material_id >= 0;
+    r.material = r.override_material ? m_materials[size_t(e->material_id)]->object.get() : m_default_material.get();
+    r.triangle_materials = me.triangle_materials.empty() ? nullptr : &me.triangle_materials;
+    // World bounds from the eight transformed corners of the object bounds.
+    for (int c = 0; c < 8; ++c) {
+      Vec3f p((c & 1) ? me.bounds.hi.x : me.bounds.lo.x, (c & 2) ? me.bounds.hi.y : me.bounds.lo.y,
+              (c & 4) ? me.bounds.hi.z : me.bounds.lo.z);
+      rs.bounds.expand(e->world_from_object.apply_point(p));
+    }
+    // Area light from the emissive triangles of this instance.
+    std::vector<EmissiveTriangle> tris;
+    const TriangleMesh& m = *me.mesh;
+    const Transform& T = e->world_from_object;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+      const Material* mat = rs.material_of(r, uint32_t(t));
+      if (!mat->is_emissive()) continue;
+      uint32_t i0 = m.indices[3 * t], i1 = m.indices[3 * t + 1], i2 = m.indices[3 * t + 2];
+      EmissiveTriangle et;
+      et.p0 = T.apply_point(m.positions[i0]);
+      et.p1 = T.apply_point(m.positions[i1]);
+      et.p2 = T.apply_point(m.positions[i2]);
+      Vec3f ng = normalize(T.apply_normal(cross(m.positions[i1] - m.positions[i0], m.positions[i2] - m.positions[i0])));
+      if (!m.normals.empty()) {
+        Vec3f ns = T.apply_normal(m.normals[i0] + m.normals[i1] + m.normals[i2]);
+        if (dot(ns, ng) < 0.f) ng = -ng;
+      }
+      et.n = ng;
+      if (!m.uvs.empty()) {
+        et.uv0 = m.uvs[i0];
+        et.uv1 = m.uvs[i1];
+        et.uv2 = m.uvs[i2];
+      } else {
+        et.uv0 = Vec2f(0, 0);
+        et.uv1 = Vec2f(1, 0);
+        et.uv2 = Vec2f(0, 1);
+      }
+      et.max_abs = vmax(vabs(et.p0), vmax(vabs(et.p1), vabs(et.p2)));
+      et.prim = uint32_t(t);
+      et.material = mat;
+      tris.push_back(et);
+    }
+    if (!tris.empty()) {
+      auto light = std::make_shared<AreaLight>(uint32_t(i), uint32_t(m.triangle_count()), std::move(tris));
+      r.light = light.get();
+      r.light_index = int32_t(rs.lights.size());
+      rs.lights.push_back(light.get());
+      m_area_lights.push_back(light);
+    }
+  }
+  for (auto& e : m_lights) {
+    if (!e) continue;
+    e->object->preprocess(rs.bounds);
+    if (e->object->is_infinite()) rs.infinite_lights.push_back(uint32_t(rs.lights.size()));
+    rs.lights.push_back(e->object.get());
+  }
+  std::vector<float> power;
+  for (const Light* l : rs.lights) power.push_back(std::max(l->power(), 0.f));
+  rs.light_pick = Distribution1D(power);
+}
+
+void Scene::render(const RenderSettings& settings, Film* film) {
+  if (instance_count() == 0) throw Error("render: the scene is empty (add at least one instance)");
+  if (!m_camera_set) throw Error("render: no camera has been set");
+  settings.validate();
+  if (has_pending_edits()) commit();
+  m_render_scene.camera = m_camera;
+  render_path_traced(m_render_scene, settings, film);
+  film->stats.mesh_bvh_builds = m_stats.mesh_bvh_builds;
+  film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last;
+  film->stats.top_level_builds = m_stats.top_level_builds;
+}
+
+}  // namespace sg

@@ -1,0 +1,163 @@
+// The integration API: typed object libraries with stable integer ids.
+//
+// Designed after HydraAPI: meshes, textures, materials, instances and lights live
+// in libraries; `add_*` returns a stable id (never reused), `update_*` / `set_*`
+// edit an object. Edits accumulate and `commit()` applies only what changed: only
+// new or edited meshes get a new BVH; moving, relabelling or re-materialing an
+// instance touches only the top-level BVH. `render()` commits pending edits first.
+// `save()` writes the whole scene (XML + binary mesh data) and `load()` replays it.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "camera/camera.h"
+#include "core/params.h"
+#include "film/film.h"
+#include "geometry/accel.h"
+#include "geometry/mesh.h"
+#include "io/image_io.h"
+#include "integrator/path_tracer.h"
+#include "integrator/render_scene.h"
+#include "light/light.h"
+#include "material/material.h"
+#include "texture/texture.h"
+
+namespace sg {
+
+/// What a file import produced.
+struct ImportResult {
+  uint32_t mesh_id = 0;
+  std::vector<uint32_t> material_ids;  ///< materials created from the file's materials
+  std::vector<uint32_t> texture_ids;   ///< textures created (one per distinct image)
+  size_t removed_degenerate = 0;       ///< zero-area triangles dropped on import
+};
+
+struct CommitStats {
+  uint64_t mesh_bvh_builds = 0;        ///< total since the scene was created
+  uint64_t mesh_bvh_builds_last = 0;   ///< during the last commit
+  uint64_t top_level_builds = 0;
+  uint64_t commits = 0;
+};
+
+class Scene {
+ public:
+  Scene();
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  // Meshes ---------------------------------------------------------------------------
+  /// Adds a validated mesh; throws sg::Error on bad data.
+  uint32_t add_mesh(TriangleMesh mesh);
+  void update_mesh(uint32_t id, TriangleMesh mesh);
+  void remove_mesh(uint32_t id);
+  const TriangleMesh& mesh(uint32_t id) const;
+  /// Imports OBJ (+MTL), PLY, glTF 2.0 / GLB via assimp, flattening node transforms into
+  /// one mesh with per-triangle materials (diffuse, base colour texture resolved relative
+  /// to the file). Throws sg::FileError naming the file.
+  ImportResult load_mesh_file(const std::string& path);
+
+  // Textures -------------------------------------------------------------------------
+  uint32_t add_texture(const std::string& type, const ParamSet& params);
+  /// Texture from decoded linear pixels (embedded images of GLB files); `scale` multiplies.
+  uint32_t add_embedded_texture(std::shared_ptr<ImageData> pixels, const Color& scale, const std::string& source);
+
+  // Materials ------------------------------------------------------------------------
+  uint32_t add_material(const std::string& type, const ParamSet& params);
+  void update_material(uint32_t id, const std::string& type, const ParamSet& params);
+
+  // Instances ------------------------------------------------------------------------
+  /// `instance_id` defaults to (instance handle + 1); `material_id` < 0 keeps the
+  /// mesh's per-triangle materials (or the default grey diffuse).
+  uint32_t add_instance(uint32_t mesh_id, const Transform& world_from_object, uint32_t class_id = 0,
+                        std::optional<uint32_t> instance_id = std::nullopt, int64_t material_id = -1);
+  void set_instance_transform(uint32_t id, const Transform& world_from_object);
+  void set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instance_id);
+  void set_instance_material(uint32_t id, int64_t material_id);
+  void remove_instance(uint32_t id);
+  size_t instance_count() const;
+
+  // Lights ---------------------------------------------------------------------------
+  uint32_t add_light(const std::string& type, const ParamSet& params);
+  void update_light(uint32_t id, const std::string& type, const ParamSet& params);
+  void remove_light(uint32_t id);
+
+  // Camera ---------------------------------------------------------------------------
+  void set_camera(const PinholeCamera& camera);
+  const PinholeCamera& camera() const { return m_camera; }
+
+  // Commit and render ----------------------------------------------------------------
+  void commit();
+  bool has_pending_edits() const;
+  const CommitStats& commit_stats() const { return m_stats; }
+  /// Renders with the current camera (committing pending edits first). Thread-safe
+  /// with respect to the GIL: touches no Python objects.
+  void render(const RenderSettings& settings, Film* film);
+
+  // Persistence ----------------------------------------------------------------------
+  void save(const std::string& path) const;
+  static std::unique_ptr<Scene> load(const std::string& path);
+
+  // Read access used by the scene file writer.
+  struct TextureEntry {
+    std::string type;
+    ParamSet params;
+    std::shared_ptr<Texture> object;
+    std::shared_ptr<ImageData> pixels;  ///< for "embedded_image" textures (from GLB files)
+  };
+  struct MaterialEntry { std::string type; ParamSet params; std::shared_ptr<Material> object; };
+  struct LightEntry { std::string type; ParamSet params; std::shared_ptr<Light> object; };
+  struct MeshEntry {
+    std::shared_ptr<TriangleMesh> mesh;
+    Bounds3 bounds;
+    std::vector<const Material*> triangle_materials;  // resolved at commit
+    bool dirty = true;
+  };
+  struct InstanceEntry {
+    uint32_t mesh_id = 0;
+    Transform world_from_object;
+    uint32_t class_id = 0, instance_id = 0;
+    int64_t material_id = -1;
+    bool dirty = true;
+  };
+  const std::vector<std::optional<MeshEntry>>& meshes() const { return m_meshes; }
+  const std::vector<std::optional<TextureEntry>>& textures() const { return m_textures; }
+  const std::vector<std::optional<MaterialEntry>>& materials() const { return m_materials; }
+  const std::vector<std::optional<InstanceEntry>>& instances() const { return m_instances; }
+  const std::vector<std::optional<LightEntry>>& lights() const { return m_lights; }
+
+  // Restoring ids exactly (used by load()).
+  void restore_slot_counts(size_t meshes, size_t textures, size_t materials, size_t instances, size_t lights);
+
+ private:
+  template <class T>
+  static T& get_slot(std::vector<std::optional<T>>& v, uint32_t id, const char* what);
+  template <class T>
+  static const T& get_slot(const std::vector<std::optional<T>>& v, uint32_t id, const char* what);
+  void check_material_id(int64_t id, const char* context) const;
+  void build_render_scene();
+
+  std::vector<std::optional<MeshEntry>> m_meshes;
+  std::vector<std::optional<TextureEntry>> m_textures;
+  std::vector<std::optional<MaterialEntry>> m_materials;
+  std::vector<std::optional<InstanceEntry>> m_instances;
+  std::vector<std::optional<LightEntry>> m_lights;
+  std::vector<uint32_t> m_removed_instances;
+  std::map<std::string, uint32_t> m_image_cache;  // (path, scale) -> texture id
+  PinholeCamera m_camera;
+  bool m_camera_set = false;
+  bool m_structure_dirty = true;  // materials / lights / labels changed
+
+  std::unique_ptr<Accel> m_accel;
+  std::shared_ptr<Material> m_default_material;
+  std::vector<std::shared_ptr<AreaLight>> m_area_lights;
+  RenderScene m_render_scene;
+  CommitStats m_stats;
+};
+
+}  // namespace sg

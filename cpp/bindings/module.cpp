@@ -1,0 +1,353 @@
+// pybind11 bindings: synthgen._core. Names mirror the C++ API (snake_case).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "api/scene.h"
+#include "core/error.h"
+
+namespace py = pybind11;
+using namespace sg;
+
+namespace {
+
+ParamSet params_from_dict(const py::dict& d, const std::string& context) {
+  ParamSet ps;
+  for (auto item : d) {
+    std::string key = py::str(item.first);
+    py::handle v = item.second;
+    if (py::isinstance<py::bool_>(v)) ps.set(key, v.cast<bool>());
+    else if (py::isinstance<TextureRef>(v)) ps.set(key, v.cast<TextureRef>());
+    else if (py::isinstance<py::int_>(v)) ps.set(key, v.cast<int64_t>());
+    else if (py::isinstance<py::float_>(v)) ps.set(key, v.cast<double>());
+    else if (py::isinstance<py::str>(v)) ps.set(key, v.cast<std::string>());
+    else if (py::isinstance<py::array>(v) || py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
+      std::vector<double> out;
+      try {
+        auto arr = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(v);
+        if (!arr || arr.ndim() > 1) throw py::value_error("");
+        if (arr.ndim() == 0) {
+          ps.set(key, double(*arr.data()));
+          continue;
+        }
+        out.assign(arr.data(), arr.data() + arr.size());
+      } catch (const py::error_already_set&) {
+        throw Error(context + ": parameter '" + key + "' must be a flat list of numbers");
+      } catch (const py::value_error&) {
+        throw Error(context + ": parameter '" + key + "' must be a flat list of numbers");
+      }
+      ps.set(key, out);
+    } else if (py::hasattr(v, "__float__")) {
+      ps.set(key, v.attr("__float__")().cast<double>());
+    } else {
+      throw Error(context + ": parameter '" + key + "' has unsupported type " +
+                  std::string(py::str(v.get_type().attr("__name__"))));
+    }
+  }
+  return ps;
+}
+
+Transform transform_from_py(const py::object& o, const char* what) {
+  if (o.is_none()) return Transform();
+  auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(o);
+  if (!a) throw Error(std::string(what) + ": expected a 4x4 matrix");
+  if (!((a.ndim() == 2 && a.shape(0) == 4 && a.shape(1) == 4) || (a.ndim() == 1 && a.shape(0) == 16)))
+    throw Error(std::string(what) + ": expected a 4x4 matrix");
+  return Transform::from_row_major(a.data(), what);
+}
+
+py::array_t<float> transform_to_py(const Transform& t) {
+  py::array_t<float> a({4, 4});
+  std::copy(t.m.begin(), t.m.end(), a.mutable_data());
+  return a;
+}
+
+template <class T>
+py::array_t<float, py::array::c_style> as_float_array(const py::object& o, size_t cols, const char* what) {
+  auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(o);
+  if (!a || a.ndim() != 2 || size_t(a.shape(1)) != cols)
+    throw Error(std::string(what) + ": expected an array of shape (N, " + std::to_string(cols) + ")");
+  return a;
+}
+
+TriangleMesh mesh_from_arrays(const py::object& positions, const py::object& indices, const py::object& normals,
+                              const py::object& uvs, const py::object& material_ids, const std::string& name) {
+  TriangleMesh m;
+  m.name = name;
+  auto p = as_float_array<float>(positions, 3, "positions");
+  m.positions.resize(size_t(p.shape(0)));
+  std::memcpy(static_cast<void*>(m.positions.data()), p.data(), m.positions.size() * sizeof(Vec3f));
+  auto idx_any = py::array::ensure(indices);
+  if (!idx_any || idx_any.ndim() != 2 || idx_any.shape(1) != 3)
+    throw Error("indices: expected an integer array of shape (M, 3)");
+  if (!py::isinstance<py::array_t<int64_t>>(idx_any) && !py::isinstance<py::array_t<int32_t>>(idx_any) &&
+      !py::isinstance<py::array_t<uint32_t>>(idx_any) && !py::isinstance<py::array_t<uint64_t>>(idx_any))
+    throw Error("indices: expected an integer array of shape (M, 3)");
+  auto idx = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(idx_any);
+  m.indices.resize(size_t(idx.size()));
+  for (size_t i = 0; i < m.indices.size(); ++i) {
+    int64_t v = idx.data()[i];
+    if (v < 0 || v > int64_t(UINT32_MAX)) throw Error("indices: triangle " + std::to_string(i / 3) + " has index " + std::to_string(v) + " out of range");
+    m.indices[i] = uint32_t(v);
+  }
+  if (!normals.is_none()) {
+    auto n = as_float_array<float>(normals, 3, "normals");
+    m.normals.resize(size_t(n.shape(0)));
+    std::memcpy(static_cast<void*>(m.normals.data()), n.data(), m.normals.size() * sizeof(Vec3f));
+  }
+  if (!uvs.is_none()) {
+    auto u = as_float_array<float>(uvs, 2, "uvs");
+    m.uvs.resize(size_t(u.shape(0)));
+    std::memcpy(static_cast<void*>(m.uvs.data()), u.data(), m.uvs.size() * sizeof(Vec2f));
+  }
+  if (!material_ids.is_none()) {
+    auto ids = py::array_t<int64_t, py::array::c_style | py::array::forcecast>::ensure(material_ids);
+    if (!ids || ids.ndim() != 1) throw Error("material_ids: expected a 1-D integer array");
+    m.material_ids.resize(size_t(ids.size()));
+    for (size_t i = 0; i < m.material_ids.size(); ++i) m.material_ids[i] = int32_t(ids.data()[i]);
+  }
+  return m;
+}
+
+// Wraps a vector owned by `owner` as a numpy array without copying.
+template <class T>
+py::array wrap(std::shared_ptr<Film> owner, std::vector<T>& v, std::vector<py::ssize_t> shape) {
+  auto* holder = new std::shared_ptr<Film>(owner);
+  py::capsule cap(holder, [](void* p) { delete static_cast<std::shared_ptr<Film>*>(p); });
+  return py::array_t<T>(shape, v.data(), cap);
+}
+
+py::dict stats_to_dict(const RenderStats& s) {
+  py::dict d;
+  d["wall_time_s"] = s.wall_time_s;
+  d["samples_per_s"] = s.samples_per_s;
+  d["rays_per_s"] = s.rays_per_s;
+  d["samples"] = s.samples;
+  d["rays"] = s.rays;
+  d["nan_samples"] = s.nan_samples;
+  d["mesh_bvh_builds"] = s.mesh_bvh_builds;
+  d["mesh_bvh_builds_last_commit"] = s.mesh_bvh_builds_last_commit;
+  d["top_level_builds"] = s.top_level_builds;
+  d["threads"] = s.threads;
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "synthgen native core: Embree-based path tracer with exact label outputs.";
+  m.attr("__version__") = SYNTHGEN_VERSION;
+
+  static py::exception<Error> base_exc(m, "SynthgenError", PyExc_ValueError);
+  static py::exception<FileError> file_exc(m, "FileError", base_exc.ptr());
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const FileError& e) {
+      file_exc(e.what());
+    } catch (const Error& e) {
+      base_exc(e.what());
+    }
+  });
+
+  py::class_<TextureRef>(m, "TextureRef", "Reference to a texture id, usable as a material parameter.")
+      .def(py::init([](uint32_t id) { return TextureRef{id}; }), py::arg("id"))
+      .def_readonly("id", &TextureRef::id)
+      .def("__repr__", [](const TextureRef& t) { return "TextureRef(" + std::to_string(t.id) + ")"; });
+
+  py::class_<PinholeCamera>(m, "PinholeCamera", R"doc(Pinhole camera in the OpenCV convention.
+
+Camera space: x right, y down, z forward. A camera-space point (X, Y, Z) projects to
+u = fx X/Z + cx, v = fy Y/Z + cy and lands in pixel (floor(u), floor(v)); pixel (i, j)
+has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world space.)doc")
+      .def(py::init([](float fx, float fy, float cx, float cy, uint32_t width, uint32_t height,
+                       const py::object& world_from_camera) {
+             PinholeCamera c;
+             c.fx = fx;
+             c.fy = fy;
+             c.cx = cx;
+             c.cy = cy;
+             c.width = width;
+             c.height = height;
+             c.world_from_camera = transform_from_py(world_from_camera, "world_from_camera");
+             c.validate();
+             return c;
+           }),
+           py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"), py::arg("width"), py::arg("height"),
+           py::arg("world_from_camera") = py::none())
+      .def_readonly("fx", &PinholeCamera::fx)
+      .def_readonly("fy", &PinholeCamera::fy)
+      .def_readonly("cx", &PinholeCamera::cx)
+      .def_readonly("cy", &PinholeCamera::cy)
+      .def_readonly("width", &PinholeCamera::width)
+      .def_readonly("height", &PinholeCamera::height)
+      .def_property_readonly("world_from_camera", [](const PinholeCamera& c) { return transform_to_py(c.world_from_camera); })
+      .def_property_readonly("K", [](const PinholeCamera& c) {
+        py::array_t<double> k({3, 3});
+        double* d = k.mutable_data();
+        double v[9] = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
+        std::copy(v, v + 9, d);
+        return k;
+      }, "3x3 intrinsic matrix.")
+      .def_static("from_fov",
+                  [](float vfov, uint32_t w, uint32_t h, const py::object& wfc) {
+                    return PinholeCamera::from_fov(vfov, w, h, transform_from_py(wfc, "world_from_camera"));
+                  },
+                  py::arg("vfov_degrees"), py::arg("width"), py::arg("height"), py::arg("world_from_camera") = py::none(),
+                  "Intrinsics from a vertical field of view (degrees); principal point at the image centre.")
+      .def_static("look_at",
+                  [](std::array<float, 3> eye, std::array<float, 3> target, std::array<float, 3> up) {
+                    return transform_to_py(PinholeCamera::look_at({eye[0], eye[1], eye[2]}, {target[0], target[1], target[2]},
+                                                                  {up[0], up[1], up[2]}));
+                  },
+                  py::arg("eye"), py::arg("target"), py::arg("up") = std::array<float, 3>{0.f, 1.f, 0.f},
+                  "world_from_camera (4x4) for a camera at eye looking at target; image y points along -up.")
+      .def("project",
+           [](const PinholeCamera& c, std::array<float, 3> p) -> py::object {
+             float u, v;
+             if (!c.project({p[0], p[1], p[2]}, &u, &v)) return py::none();
+             return py::make_tuple(u, v);
+           },
+           py::arg("point"), "Continuous image coordinates (u, v) of a world point, or None behind the camera.")
+      .def("generate_ray",
+           [](const PinholeCamera& c, float u, float v) {
+             Ray r = c.generate_ray(u, v);
+             return py::make_tuple(std::array<float, 3>{r.o.x, r.o.y, r.o.z}, std::array<float, 3>{r.d.x, r.d.y, r.d.z});
+           },
+           py::arg("u"), py::arg("v"), "(origin, unit direction) of the ray through image position (u, v).");
+
+  py::class_<Film, std::shared_ptr<Film>>(m, "RenderResult", "Outputs of Scene.render as numpy arrays.")
+      .def_property_readonly("rgb", [](std::shared_ptr<Film> f) { return wrap(f, f->rgb, {f->height, f->width, 3}); })
+      .def_property_readonly("alpha", [](std::shared_ptr<Film> f) { return wrap(f, f->alpha, {f->height, f->width}); })
+      .def_property_readonly("depth", [](std::shared_ptr<Film> f) { return wrap(f, f->depth, {f->height, f->width}); })
+      .def_property_readonly("distance", [](std::shared_ptr<Film> f) { return wrap(f, f->distance, {f->height, f->width}); })
+      .def_property_readonly("normal", [](std::shared_ptr<Film> f) { return wrap(f, f->normal, {f->height, f->width, 3}); })
+      .def_property_readonly("albedo", [](std::shared_ptr<Film> f) { return wrap(f, f->albedo, {f->height, f->width, 3}); })
+      .def_property_readonly("instance_id", [](std::shared_ptr<Film> f) { return wrap(f, f->instance_id, {f->height, f->width}); })
+      .def_property_readonly("class_id", [](std::shared_ptr<Film> f) { return wrap(f, f->class_id, {f->height, f->width}); })
+      .def_property_readonly("stats", [](std::shared_ptr<Film> f) { return stats_to_dict(f->stats); });
+
+  py::class_<Scene>(m, "Scene", R"doc(Integration API: typed libraries with stable integer ids.
+
+Edits accumulate; commit() applies only what changed (only new or edited meshes get
+a BVH build). render() commits pending edits first.)doc")
+      .def(py::init<>())
+      .def("add_mesh",
+           [](Scene& s, const py::object& positions, const py::object& indices, const py::object& normals,
+              const py::object& uvs, const py::object& material_ids, const std::string& name) {
+             return s.add_mesh(mesh_from_arrays(positions, indices, normals, uvs, material_ids, name));
+           },
+           py::arg("positions"), py::arg("indices"), py::arg("normals") = py::none(), py::arg("uvs") = py::none(),
+           py::arg("material_ids") = py::none(), py::arg("name") = "")
+      .def("update_mesh",
+           [](Scene& s, uint32_t id, const py::object& positions, const py::object& indices, const py::object& normals,
+              const py::object& uvs, const py::object& material_ids, const std::string& name) {
+             s.update_mesh(id, mesh_from_arrays(positions, indices, normals, uvs, material_ids, name));
+           },
+           py::arg("mesh_id"), py::arg("positions"), py::arg("indices"), py::arg("normals") = py::none(),
+           py::arg("uvs") = py::none(), py::arg("material_ids") = py::none(), py::arg("name") = "")
+      .def("remove_mesh", &Scene::remove_mesh, py::arg("mesh_id"))
+      .def("mesh_arrays",
+           [](const Scene& s, uint32_t id) {
+             const TriangleMesh& m = s.mesh(id);
+             py::dict d;
+             py::array_t<float> p({py::ssize_t(m.positions.size()), py::ssize_t(3)});
+             std::memcpy(p.mutable_data(), m.positions.data(), m.positions.size() * sizeof(Vec3f));
+             py::array_t<uint32_t> i({py::ssize_t(m.triangle_count()), py::ssize_t(3)});
+             std::memcpy(i.mutable_data(), m.indices.data(), m.indices.size() * sizeof(uint32_t));
+             d["positions"] = p;
+             d["indices"] = i;
+             d["material_ids"] = py::array_t<int32_t>(py::ssize_t(m.material_ids.size()), m.material_ids.data());
+             d["has_normals"] = !m.normals.empty();
+             d["has_uvs"] = !m.uvs.empty();
+             return d;
+           },
+           py::arg("mesh_id"), "Copies of a mesh's positions, indices and material ids.")
+      .def("load_mesh_file",
+           [](Scene& s, const std::string& path) {
+             ImportResult r = s.load_mesh_file(path);
+             py::dict d;
+             d["mesh_id"] = r.mesh_id;
+             d["material_ids"] = r.material_ids;
+             d["texture_ids"] = r.texture_ids;
+             d["removed_degenerate"] = r.removed_degenerate;
+             return d;
+           },
+           py::arg("path"), "Imports OBJ/PLY/glTF/GLB (node transforms applied, materials created).")
+      .def("add_texture",
+           [](Scene& s, const std::string& type, const py::dict& params) {
+             return s.add_texture(type, params_from_dict(params, "texture '" + type + "'"));
+           },
+           py::arg("type"), py::arg("params") = py::dict())
+      .def("add_material",
+           [](Scene& s, const std::string& type, const py::dict& params) {
+             return s.add_material(type, params_from_dict(params, "material '" + type + "'"));
+           },
+           py::arg("type"), py::arg("params") = py::dict())
+      .def("update_material",
+           [](Scene& s, uint32_t id, const std::string& type, const py::dict& params) {
+             s.update_material(id, type, params_from_dict(params, "material '" + type + "'"));
+           },
+           py::arg("material_id"), py::arg("type"), py::arg("params") = py::dict())
+      .def("add_instance",
+           [](Scene& s, uint32_t mesh_id, const py::object& wfo, uint32_t class_id, std::optional<uint32_t> instance_id,
+              int64_t material_id) {
+             return s.add_instance(mesh_id, transform_from_py(wfo, "world_from_object"), class_id, instance_id, material_id);
+           },
+           py::arg("mesh_id"), py::arg("world_from_object") = py::none(), py::arg("class_id") = 0,
+           py::arg("instance_id") = py::none(), py::arg("material_id") = -1)
+      .def("set_instance_transform",
+           [](Scene& s, uint32_t id, const py::object& wfo) {
+             s.set_instance_transform(id, transform_from_py(wfo, "world_from_object"));
+           },
+           py::arg("instance"), py::arg("world_from_object"))
+      .def("set_instance_labels", &Scene::set_instance_labels, py::arg("instance"), py::arg("class_id"), py::arg("instance_id"))
+      .def("set_instance_material", &Scene::set_instance_material, py::arg("instance"), py::arg("material_id"))
+      .def("remove_instance", &Scene::remove_instance, py::arg("instance"))
+      .def("instance_count", &Scene::instance_count)
+      .def("add_light",
+           [](Scene& s, const std::string& type, const py::dict& params) {
+             return s.add_light(type, params_from_dict(params, "light '" + type + "'"));
+           },
+           py::arg("type"), py::arg("params") = py::dict())
+      .def("update_light",
+           [](Scene& s, uint32_t id, const std::string& type, const py::dict& params) {
+             s.update_light(id, type, params_from_dict(params, "light '" + type + "'"));
+           },
+           py::arg("light_id"), py::arg("type"), py::arg("params") = py::dict())
+      .def("remove_light", &Scene::remove_light, py::arg("light_id"))
+      .def("set_camera", &Scene::set_camera, py::arg("camera"))
+      .def_property_readonly("camera", &Scene::camera)
+      .def("commit", &Scene::commit, py::call_guard<py::gil_scoped_release>())
+      .def("has_pending_edits", &Scene::has_pending_edits)
+      .def_property_readonly("commit_stats", [](const Scene& s) {
+        py::dict d;
+        d["mesh_bvh_builds"] = s.commit_stats().mesh_bvh_builds;
+        d["mesh_bvh_builds_last"] = s.commit_stats().mesh_bvh_builds_last;
+        d["top_level_builds"] = s.commit_stats().top_level_builds;
+        d["commits"] = s.commit_stats().commits;
+        return d;
+      })
+      .def("render",
+           [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
+              uint32_t tile_size) {
+             RenderSettings rs;
+             rs.spp = spp;
+             rs.max_depth = max_depth;
+             rs.rr_depth = rr_depth;
+             rs.seed = seed;
+             rs.threads = threads;
+             rs.tile_size = tile_size;
+             auto film = std::make_shared<Film>();
+             {
+               py::gil_scoped_release release;
+               s.render(rs, film.get());
+             }
+             return film;
+           },
+           py::arg("spp") = 16, py::arg("max_depth") = 8, py::arg("rr_depth") = 5, py::arg("seed") = 0,
+           py::arg("threads") = 0, py::arg("tile_size") = 16,
+           "Path-traces the scene; releases the GIL. Returns a RenderResult.")
+      .def("save", &Scene::save, py::arg("path"), "Writes the scene (XML + '.bin' sidecar) for replay.")
+      .def_static("load", &Scene::load, py::arg("path"), "Replays a scene written by save().");
+}

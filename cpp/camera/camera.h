@@ -1,0 +1,43 @@
+// Pinhole camera in the OpenCV convention.
+//
+// Camera space: x right, y down, z forward (the viewing direction). A camera-space
+// point (X, Y, Z) projects to continuous image coordinates
+//   u = fx * X / Z + cx,   v = fy * Y / Z + cy,
+// and lands in pixel (floor(u), floor(v)). Pixel (i, j) covers [i, i+1) x [j, j+1); its
+// centre is at (i + 0.5, j + 0.5). `world_from_camera` maps camera space to world space
+// (its last column is the camera position).
+#pragma once
+
+#include <cstdint>
+
+#include "core/math.h"
+
+namespace sg {
+
+struct PinholeCamera {
+  float fx = 1.f, fy = 1.f, cx = 0.f, cy = 0.f;
+  uint32_t width = 0, height = 0;
+  Transform world_from_camera;
+
+  /// Throws sg::Error when the intrinsics are unusable (zero/negative/non-finite focal
+  /// length, empty image).
+  void validate() const;
+
+  /// Camera ray through continuous image position (u, v); the direction is unit length.
+  /// `z_per_t` receives the camera-space z of the unit direction (depth = t * z_per_t).
+  Ray generate_ray(float u, float v, float* z_per_t = nullptr) const;
+
+  /// Projects a world point; returns false when it is behind the camera.
+  bool project(const Vec3f& p_world, float* u, float* v) const;
+
+  Vec3f position() const { return world_from_camera.apply_point(Vec3f(0.f)); }
+
+  /// Intrinsics from a vertical field of view (degrees), principal point at the image centre.
+  static PinholeCamera from_fov(float vfov_degrees, uint32_t width, uint32_t height,
+                                const Transform& world_from_camera);
+  /// `world_from_camera` for a camera at `eye` looking at `target`; `up` is the world
+  /// up vector (image y points along -up).
+  static Transform look_at(const Vec3f& eye, const Vec3f& target, const Vec3f& up);
+};
+
+}  // namespace sg

@@ -1,0 +1,100 @@
+// Sampling routines: warps from the unit square to common domains, their pdfs,
+// the MIS power heuristic and a discrete 1D distribution.
+// Each warp ships with a chi-square test in tests/cpp/test_sampling.cpp.
+#pragma once
+
+#include <vector>
+
+#include "core/math.h"
+
+namespace sg {
+
+/// NOTE: concentric mapping of Shirley & Chiu, "A Low Distortion Map Between Disk and
+/// Square", JGT 2(3), 1997.
+inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
+  float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
+  if (ox == 0.f && oy == 0.f) return {0.f, 0.f};
+  float r, theta;
+  if (std::fabs(ox) > std::fabs(oy)) {
+    r = ox;
+    theta = (k_pi / 4.f) * (oy / ox);
+  } else {
+    r = oy;
+    theta = (k_pi / 2.f) - (k_pi / 4.f) * (ox / oy);
+  }
+  return {r * std::cos(theta), r * std::sin(theta)};
+}
+
+/// Cosine-weighted hemisphere around +z (Malley's method). pdf = cos(theta) / pi.
+inline Vec3f square_to_cosine_hemisphere(Vec2f u) {
+  Vec2f d = square_to_uniform_disk_concentric(u);
+  float z = std::sqrt(std::max(0.f, 1.f - d.x * d.x - d.y * d.y));
+  return {d.x, d.y, z};
+}
+inline float cosine_hemisphere_pdf(const Vec3f& v) { return v.z > 0.f ? v.z * k_inv_pi : 0.f; }
+
+/// Uniform direction on the unit sphere. pdf = 1 / (4 pi).
+inline Vec3f square_to_uniform_sphere(Vec2f u) {
+  float z = 1.f - 2.f * u.x;
+  float r = std::sqrt(std::max(0.f, 1.f - z * z));
+  float phi = 2.f * k_pi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+inline float uniform_sphere_pdf() { return k_inv_four_pi; }
+
+/// Uniform direction inside the cone of directions within acos(cos_theta_max) of +z.
+/// pdf = 1 / (2 pi (1 - cos_theta_max)).
+inline Vec3f square_to_uniform_cone(Vec2f u, float cos_theta_max) {
+  float cos_theta = 1.f - u.x * (1.f - cos_theta_max);
+  float sin_theta = std::sqrt(std::max(0.f, 1.f - cos_theta * cos_theta));
+  float phi = 2.f * k_pi * u.y;
+  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+}
+inline float uniform_cone_pdf(float cos_theta_max) {
+  return 1.f / (2.f * k_pi * (1.f - cos_theta_max));
+}
+/// Solid angle of a cone with the given half-angle cosine, accurate for tiny cones.
+/// NOTE: 1 - cos(t) = 2 sin^2(t/2) avoids cancellation for the sun's 0.27 degree half-angle.
+inline float cone_solid_angle_from_half_angle(float half_angle) {
+  float s = std::sin(0.5f * half_angle);
+  return 2.f * k_pi * 2.f * s * s;
+}
+
+/// Uniform barycentric coordinates (b1, b2) on a triangle; b0 = 1 - b1 - b2.
+/// NOTE: square-root parameterization, Osada et al. 2002 / pbrt-v3 eq. 13.x;
+/// pdf = 1 / area on the triangle.
+inline Vec2f square_to_uniform_triangle(Vec2f u) {
+  float su0 = std::sqrt(u.x);
+  return {1.f - su0, u.y * su0};
+}
+
+/// Power heuristic with beta = 2 (Veach 1997, eq. 9.13).
+inline float power_heuristic(float pdf_a, float pdf_b) {
+  float a = pdf_a * pdf_a, b = pdf_b * pdf_b;
+  if (a == 0.f) return 0.f;
+  if (std::isinf(a)) return 1.f;
+  return a / (a + b);
+}
+
+/// Piecewise-constant discrete distribution over N bins with non-negative weights.
+class Distribution1D {
+ public:
+  Distribution1D() = default;
+  explicit Distribution1D(const std::vector<float>& weights);
+
+  bool empty() const { return m_pmf.empty(); }
+  size_t size() const { return m_pmf.size(); }
+  double total() const { return m_total; }
+  float pmf(size_t i) const { return m_pmf[i]; }
+
+  /// Picks a bin with probability proportional to its weight; `u` is remapped to [0, 1)
+  /// inside the chosen bin so it can be reused for a further decision.
+  size_t sample(float u, float* pmf_out = nullptr, float* u_remapped = nullptr) const;
+
+ private:
+  std::vector<float> m_cdf;  // size N + 1
+  std::vector<float> m_pmf;
+  double m_total = 0.0;
+};
+
+}  // namespace sg

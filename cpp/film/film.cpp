@@ -1,0 +1,22 @@
+#include "film/film.h"
+
+#include <limits>
+
+namespace sg {
+
+void Film::allocate(uint32_t w, uint32_t h) {
+  width = w;
+  height = h;
+  size_t n = size_t(w) * h;
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  rgb.assign(3 * n, 0.f);
+  alpha.assign(n, 0.f);
+  depth.assign(n, inf);
+  distance.assign(n, inf);
+  normal.assign(3 * n, 0.f);
+  albedo.assign(3 * n, 0.f);
+  instance_id.assign(n, 0u);
+  class_id.assign(n, 0u);
+}
+
+}  // namespace sg

@@ -1,0 +1,40 @@
+// Film: the render outputs. Radiance is the box-filtered mean of the samples;
+// every label output comes from the first hit of one camera ray through the pixel
+// centre and is never filtered or averaged.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace sg {
+
+struct RenderStats {
+  double wall_time_s = 0.0;
+  double samples_per_s = 0.0;
+  double rays_per_s = 0.0;
+  uint64_t samples = 0;
+  uint64_t rays = 0;             ///< camera, bounce and shadow rays
+  uint64_t nan_samples = 0;      ///< discarded NaN / infinite samples
+  uint64_t mesh_bvh_builds = 0;  ///< total bottom-level BVH builds of the scene so far
+  uint64_t mesh_bvh_builds_last_commit = 0;
+  uint64_t top_level_builds = 0;
+  uint32_t threads = 0;
+};
+
+struct Film {
+  uint32_t width = 0, height = 0;
+  std::vector<float> rgb;       ///< H x W x 3, linear
+  std::vector<float> alpha;     ///< H x W, fraction of samples whose camera ray hit geometry
+  std::vector<float> depth;     ///< H x W, camera-space z (metres), +inf on background
+  std::vector<float> distance;  ///< H x W, camera-ray length, +inf on background
+  std::vector<float> normal;    ///< H x W x 3, world-space shading normal, 0 on background
+  std::vector<float> albedo;    ///< H x W x 3
+  std::vector<uint32_t> instance_id;  ///< H x W, 0 = background
+  std::vector<uint32_t> class_id;     ///< H x W, 0 = background
+  RenderStats stats;
+
+  void allocate(uint32_t w, uint32_t h);
+};
+
+}  // namespace sg

@@ -1,0 +1,52 @@
+// Ray-traversal acceleration: one Embree BVH per mesh, instanced into a
+// top-level BVH. accel.cpp is the only file of synthgen that includes Embree.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "core/math.h"
+#include "geometry/mesh.h"
+
+namespace sg {
+
+/// Result of a closest-hit query. `inst` is the instance slot, `prim` the triangle index,
+/// (u, v) the barycentric coordinates of vertices 1 and 2.
+struct RayHit {
+  float t = k_inf;
+  float u = 0.f, v = 0.f;
+  uint32_t prim = 0;
+  uint32_t inst = 0;
+};
+
+class Accel {
+ public:
+  Accel();
+  ~Accel();
+  Accel(const Accel&) = delete;
+  Accel& operator=(const Accel&) = delete;
+
+  /// Builds (or rebuilds) the bottom-level BVH of mesh slot `mesh_slot`.
+  void build_mesh(uint32_t mesh_slot, const TriangleMesh& mesh);
+  void release_mesh(uint32_t mesh_slot);
+  /// Adds or updates the top-level instance `inst_slot` of mesh `mesh_slot`.
+  void set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object);
+  void remove_instance(uint32_t inst_slot);
+  /// Rebuilds the top-level BVH (cheap: one leaf per instance).
+  void commit();
+
+  bool intersect(const Ray& ray, RayHit* hit) const;
+  bool occluded(const Ray& ray) const;
+
+  /// Number of bottom-level (per-mesh) BVH builds since construction.
+  uint64_t mesh_builds() const { return m_mesh_builds; }
+  uint64_t top_level_builds() const { return m_top_builds; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+  uint64_t m_mesh_builds = 0;
+  uint64_t m_top_builds = 0;
+};
+
+}  // namespace sg

@@ -1,0 +1,27 @@
+// Unidirectional path tracer with next-event estimation and multiple importance
+// sampling (power heuristic) between light and BSDF sampling.
+#pragma once
+
+#include <cstdint>
+
+#include "film/film.h"
+#include "integrator/render_scene.h"
+
+namespace sg {
+
+struct RenderSettings {
+  uint32_t spp = 16;         ///< samples per pixel
+  uint32_t max_depth = 8;    ///< maximum number of ray segments from the camera (1 = direct view of emitters)
+  uint32_t rr_depth = 5;     ///< Russian roulette starts once a path has this many segments
+  uint64_t seed = 0;
+  uint32_t threads = 0;      ///< 0 = all hardware threads
+  uint32_t tile_size = 16;
+
+  void validate() const;
+};
+
+/// Renders `scene` into `film` (allocated here). Deterministic for a given seed,
+/// independent of `threads` and tile scheduling.
+void render_path_traced(const RenderScene& scene, const RenderSettings& settings, Film* film);
+
+}  // namespace sg

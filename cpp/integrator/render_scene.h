@@ -1,0 +1,48 @@
+// The committed, read-only view of a scene that the integrator renders.
+// Built by sg::Scene::commit(); contains no owning pointers and is never modified
+// while rendering.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "camera/camera.h"
+#include "core/sampling.h"
+#include "geometry/accel.h"
+#include "geometry/mesh.h"
+#include "light/light.h"
+#include "material/material.h"
+
+namespace sg {
+
+struct InstanceRecord {
+  bool active = false;
+  const TriangleMesh* mesh = nullptr;
+  Transform world_from_object;
+  uint32_t class_id = 0, instance_id = 0;
+  const Material* material = nullptr;  ///< instance material (override or default)
+  bool override_material = false;      ///< ignore per-triangle material ids
+  const std::vector<const Material*>* triangle_materials = nullptr;  ///< per triangle, may be null
+  const AreaLight* light = nullptr;
+  int32_t light_index = -1;
+};
+
+struct RenderScene {
+  const Accel* accel = nullptr;
+  std::vector<InstanceRecord> instances;  ///< indexed by instance slot (= Embree instance id)
+  std::vector<const Light*> lights;
+  Distribution1D light_pick;
+  std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
+  PinholeCamera camera;
+  Bounds3 bounds;
+
+  const Material* material_of(const InstanceRecord& inst, uint32_t prim) const {
+    if (!inst.override_material && inst.triangle_materials) {
+      const Material* m = (*inst.triangle_materials)[prim];
+      if (m) return m;
+    }
+    return inst.material;
+  }
+};
+
+}  // namespace sg

@@ -1,0 +1,141 @@
+#include "io/mesh_io.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <assimp/Importer.hpp>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <filesystem>
+
+#include "core/error.h"
+
+namespace sg {
+
+namespace fs = std::filesystem;
+
+static ImageData decode_embedded(const aiTexture* tex, const std::string& path) {
+  ImageData img;
+  if (tex->mHeight != 0) {
+    // Uncompressed BGRA texels.
+    img.width = int(tex->mWidth);
+    img.height = int(tex->mHeight);
+    img.channels = 4;
+    img.pixels.resize(size_t(img.width) * img.height * 4);
+    for (size_t i = 0; i < size_t(img.width) * img.height; ++i) {
+      const aiTexel& t = tex->pcData[i];
+      img.pixels[4 * i] = t.r / 255.f;
+      img.pixels[4 * i + 1] = t.g / 255.f;
+      img.pixels[4 * i + 2] = t.b / 255.f;
+      img.pixels[4 * i + 3] = t.a / 255.f;
+    }
+    return img;
+  }
+  std::string hint = tex->achFormatHint[0] ? std::string(tex->achFormatHint) : "png";
+  OIIO::Filesystem::IOMemReader reader(tex->pcData, tex->mWidth);
+  OIIO::ImageSpec config;
+  auto in = OIIO::ImageInput::open("embedded." + hint, &config, &reader);
+  if (!in) throw FileError(path, "cannot decode embedded texture (" + OIIO::geterror() + ")");
+  const auto& spec = in->spec();
+  img.width = spec.width;
+  img.height = spec.height;
+  img.channels = spec.nchannels;
+  img.pixels.resize(size_t(img.width) * img.height * img.channels);
+  if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
+    throw FileError(path, "cannot decode embedded texture (" + in->geterror() + ")");
+  return img;
+}
+
+ImportedModel import_mesh_file(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw FileError(path, "file not found");
+  if (fs::is_directory(path, ec)) throw FileError(path, "is a directory, not a mesh file");
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_JoinIdenticalVertices |
+                aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+  if (!scene) throw FileError(path, std::string("cannot import mesh: ") + importer.GetErrorString());
+  if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw FileError(path, "incomplete scene (the importer gave up)");
+
+  ImportedModel model;
+  model.mesh.name = fs::path(path).filename().string();
+  bool all_normals = scene->mNumMeshes > 0, any_uvs = false;
+  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+    const aiMesh* m = scene->mMeshes[i];
+    if (!(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    all_normals = all_normals && m->HasNormals();
+    any_uvs = any_uvs || m->HasTextureCoords(0);
+  }
+  for (unsigned i = 0; i < scene->mNumMeshes; ++i) {
+    const aiMesh* m = scene->mMeshes[i];
+    if (!(m->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    uint32_t base = uint32_t(model.mesh.positions.size());
+    for (unsigned v = 0; v < m->mNumVertices; ++v) {
+      const aiVector3D& p = m->mVertices[v];
+      model.mesh.positions.emplace_back(p.x, p.y, p.z);
+      if (all_normals) {
+        const aiVector3D& n = m->mNormals[v];
+        Vec3f nn(n.x, n.y, n.z);
+        // Zero normals occur in real files: fall back to a placeholder fixed below.
+        model.mesh.normals.push_back(nn);
+      }
+      if (any_uvs) {
+        if (m->HasTextureCoords(0)) model.mesh.uvs.emplace_back(m->mTextureCoords[0][v].x, m->mTextureCoords[0][v].y);
+        else model.mesh.uvs.emplace_back(0.f, 0.f);
+      }
+    }
+    for (unsigned f = 0; f < m->mNumFaces; ++f) {
+      const aiFace& face = m->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      for (int k = 0; k < 3; ++k) model.mesh.indices.push_back(base + face.mIndices[k]);
+      model.mesh.material_ids.push_back(int32_t(m->mMaterialIndex));
+    }
+  }
+  if (model.mesh.indices.empty()) throw FileError(path, "contains no triangles");
+  for (const Vec3f& p : model.mesh.positions)
+    if (!is_finite(p)) throw FileError(path, "contains a vertex with a non-finite (NaN or inf) coordinate");
+  // Drop unusable normals altogether rather than shading with garbage.
+  bool normals_ok = true;
+  for (Vec3f& n : model.mesh.normals)
+    if (!is_finite(n) || length_squared(n) == 0.f) normals_ok = false;
+  if (!normals_ok) model.mesh.normals.clear();
+  model.removed_degenerate = model.mesh.remove_degenerate_triangles();
+  if (model.mesh.indices.empty()) throw FileError(path, "all triangles are degenerate (zero area)");
+
+  fs::path dir = fs::path(path).parent_path();
+  for (unsigned i = 0; i < scene->mNumMaterials; ++i) {
+    const aiMaterial* am = scene->mMaterials[i];
+    ImportedMaterial im;
+    aiString name;
+    if (am->Get(AI_MATKEY_NAME, name) == AI_SUCCESS) im.name = name.C_Str();
+    aiColor4D c;
+    if (am->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || am->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS)
+      im.base_color = Color(c.r, c.g, c.b);
+    aiColor3D e;
+    if (am->Get(AI_MATKEY_COLOR_EMISSIVE, e) == AI_SUCCESS) im.emission = Color(e.r, e.g, e.b);
+    aiString tex;
+    bool has_tex = am->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
+                   am->GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS;
+    if (has_tex && tex.length > 0) {
+      if (const aiTexture* emb = scene->GetEmbeddedTexture(tex.C_Str())) {
+        im.embedded_texture = decode_embedded(emb, path);
+        im.has_embedded_texture = true;
+      } else {
+        fs::path tp = fs::path(std::string(tex.C_Str()));
+        if (tp.is_relative()) tp = dir / tp;
+        if (!fs::exists(tp, ec))
+          throw FileError(path, "material '" + im.name + "' references texture '" + std::string(tex.C_Str()) +
+                                    "' which does not exist (looked for " + tp.string() + ")");
+        im.texture_path = tp.lexically_normal().string();
+      }
+    }
+    model.materials.push_back(std::move(im));
+  }
+  for (int32_t& id : model.mesh.material_ids)
+    if (id < 0 || size_t(id) >= model.materials.size()) id = -1;
+  return model;
+}
+
+}  // namespace sg

@@ -1,0 +1,286 @@
+// Scene::save / Scene::load: the scene state as XML (pugixml, the only file using
+// its API) plus a binary sidecar "<file>.bin" with mesh and embedded-image data.
+// Ids are preserved exactly, so a replayed scene renders bit-identically.
+#include <pugixml.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "api/scene.h"
+#include "core/error.h"
+
+namespace sg {
+
+namespace {
+
+std::string fmt_floats(const float* v, size_t n) {
+  std::string s;
+  char buf[32];
+  for (size_t i = 0; i < n; ++i) {
+    std::snprintf(buf, sizeof(buf), "%.9g", double(v[i]));
+    if (i) s += ' ';
+    s += buf;
+  }
+  return s;
+}
+
+std::vector<float> parse_floats(const char* s, size_t expected, const std::string& ctx) {
+  std::vector<float> out;
+  std::istringstream is(s);
+  float f;
+  while (is >> f) out.push_back(f);
+  if (out.size() != expected) throw Error(ctx + ": expected " + std::to_string(expected) + " numbers");
+  return out;
+}
+
+void write_params(pugi::xml_node node, const ParamSet& ps) {
+  char buf[40];
+  for (const auto& [name, value] : ps.values()) {
+    pugi::xml_node p = node.append_child("param");
+    p.append_attribute("name") = name.c_str();
+    if (auto b = std::get_if<bool>(&value)) {
+      p.append_attribute("type") = "bool";
+      p.append_attribute("value") = *b ? "true" : "false";
+    } else if (auto i = std::get_if<int64_t>(&value)) {
+      p.append_attribute("type") = "int";
+      p.append_attribute("value") = std::to_string(*i).c_str();
+    } else if (auto d = std::get_if<double>(&value)) {
+      p.append_attribute("type") = "float";
+      std::snprintf(buf, sizeof(buf), "%.17g", *d);
+      p.append_attribute("value") = buf;
+    } else if (auto s = std::get_if<std::string>(&value)) {
+      p.append_attribute("type") = "string";
+      p.append_attribute("value") = s->c_str();
+    } else if (auto v = std::get_if<std::vector<double>>(&value)) {
+      p.append_attribute("type") = "floats";
+      std::string out;
+      for (size_t k = 0; k < v->size(); ++k) {
+        std::snprintf(buf, sizeof(buf), "%.17g", (*v)[k]);
+        if (k) out += ' ';
+        out += buf;
+      }
+      p.append_attribute("value") = out.c_str();
+    } else if (auto t = std::get_if<TextureRef>(&value)) {
+      p.append_attribute("type") = "texture";
+      p.append_attribute("value") = std::to_string(t->id).c_str();
+    }
+  }
+}
+
+ParamSet read_params(pugi::xml_node node) {
+  ParamSet ps;
+  for (pugi::xml_node p : node.children("param")) {
+    std::string name = p.attribute("name").as_string();
+    std::string type = p.attribute("type").as_string();
+    const char* v = p.attribute("value").as_string();
+    if (type == "bool") ps.set(name, std::string(v) == "true");
+    else if (type == "int") ps.set(name, int64_t(std::stoll(v)));
+    else if (type == "float") ps.set(name, std::strtod(v, nullptr));
+    else if (type == "string") ps.set(name, std::string(v));
+    else if (type == "texture") ps.set(name, TextureRef{uint32_t(std::stoul(v))});
+    else if (type == "floats") {
+      std::vector<double> d;
+      std::istringstream is(v);
+      double x;
+      while (is >> x) d.push_back(x);
+      ps.set(name, d);
+    } else {
+      throw Error("scene file: parameter '" + name + "' has unknown type '" + type + "'");
+    }
+  }
+  return ps;
+}
+
+template <class T>
+uint64_t append_blob(std::ofstream& bin, const std::vector<T>& v) {
+  uint64_t off = uint64_t(bin.tellp());
+  if (!v.empty()) bin.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(T)));
+  return off;
+}
+
+template <class T>
+void read_blob(const std::vector<char>& bin, uint64_t off, size_t count, std::vector<T>* out, const std::string& ctx) {
+  if (off + count * sizeof(T) > bin.size()) throw Error(ctx + ": binary data is truncated");
+  out->resize(count);
+  if (count) std::memcpy(out->data(), bin.data() + off, count * sizeof(T));
+}
+
+}  // namespace
+
+void Scene::save(const std::string& path) const {
+  std::string bin_path = path + ".bin";
+  std::ofstream bin(bin_path, std::ios::binary);
+  if (!bin) throw FileError(bin_path, "cannot open for writing");
+  pugi::xml_document doc;
+  pugi::xml_node root = doc.append_child("synthgen_scene");
+  root.append_attribute("version") = 1;
+  root.append_attribute("bin") = std::filesystem::path(bin_path).filename().string().c_str();
+  pugi::xml_node counts = root.append_child("slots");
+  counts.append_attribute("meshes") = uint64_t(m_meshes.size());
+  counts.append_attribute("textures") = uint64_t(m_textures.size());
+  counts.append_attribute("materials") = uint64_t(m_materials.size());
+  counts.append_attribute("instances") = uint64_t(m_instances.size());
+  counts.append_attribute("lights") = uint64_t(m_lights.size());
+
+  for (size_t i = 0; i < m_textures.size(); ++i) {
+    if (!m_textures[i]) continue;
+    const auto& e = *m_textures[i];
+    pugi::xml_node n = root.append_child("texture");
+    n.append_attribute("id") = uint64_t(i);
+    n.append_attribute("type") = e.type.c_str();
+    if (e.pixels) {
+      n.append_attribute("width") = e.pixels->width;
+      n.append_attribute("height") = e.pixels->height;
+      n.append_attribute("channels") = e.pixels->channels;
+      n.append_attribute("offset") = append_blob(bin, e.pixels->pixels);
+    }
+    write_params(n, e.params);
+  }
+  for (size_t i = 0; i < m_materials.size(); ++i) {
+    if (!m_materials[i]) continue;
+    pugi::xml_node n = root.append_child("material");
+    n.append_attribute("id") = uint64_t(i);
+    n.append_attribute("type") = m_materials[i]->type.c_str();
+    write_params(n, m_materials[i]->params);
+  }
+  for (size_t i = 0; i < m_meshes.size(); ++i) {
+    if (!m_meshes[i]) continue;
+    const TriangleMesh& m = *m_meshes[i]->mesh;
+    pugi::xml_node n = root.append_child("mesh");
+    n.append_attribute("id") = uint64_t(i);
+    n.append_attribute("name") = m.name.c_str();
+    n.append_attribute("vertices") = uint64_t(m.positions.size());
+    n.append_attribute("triangles") = uint64_t(m.triangle_count());
+    n.append_attribute("positions") = append_blob(bin, m.positions);
+    n.append_attribute("indices") = append_blob(bin, m.indices);
+    if (!m.normals.empty()) n.append_attribute("normals") = append_blob(bin, m.normals);
+    if (!m.uvs.empty()) n.append_attribute("uvs") = append_blob(bin, m.uvs);
+    if (!m.material_ids.empty()) n.append_attribute("material_ids") = append_blob(bin, m.material_ids);
+  }
+  for (size_t i = 0; i < m_instances.size(); ++i) {
+    if (!m_instances[i]) continue;
+    const auto& e = *m_instances[i];
+    pugi::xml_node n = root.append_child("instance");
+    n.append_attribute("id") = uint64_t(i);
+    n.append_attribute("mesh") = e.mesh_id;
+    n.append_attribute("class_id") = e.class_id;
+    n.append_attribute("instance_id") = e.instance_id;
+    n.append_attribute("material") = static_cast<long long>(e.material_id);
+    n.append_attribute("world_from_object") = fmt_floats(e.world_from_object.m.data(), 16).c_str();
+  }
+  for (size_t i = 0; i < m_lights.size(); ++i) {
+    if (!m_lights[i]) continue;
+    pugi::xml_node n = root.append_child("light");
+    n.append_attribute("id") = uint64_t(i);
+    n.append_attribute("type") = m_lights[i]->type.c_str();
+    write_params(n, m_lights[i]->params);
+  }
+  if (m_camera_set) {
+    pugi::xml_node n = root.append_child("camera");
+    float k[4] = {m_camera.fx, m_camera.fy, m_camera.cx, m_camera.cy};
+    n.append_attribute("intrinsics") = fmt_floats(k, 4).c_str();
+    n.append_attribute("width") = m_camera.width;
+    n.append_attribute("height") = m_camera.height;
+    n.append_attribute("world_from_camera") = fmt_floats(m_camera.world_from_camera.m.data(), 16).c_str();
+  }
+  bin.close();
+  if (!bin) throw FileError(bin_path, "write failed");
+  if (!doc.save_file(path.c_str(), "  ")) throw FileError(path, "cannot write scene file");
+}
+
+std::unique_ptr<Scene> Scene::load(const std::string& path) {
+  pugi::xml_document doc;
+  pugi::xml_parse_result res = doc.load_file(path.c_str());
+  if (!res) throw FileError(path, std::string("cannot parse scene file: ") + res.description() + " at byte " +
+                                      std::to_string(res.offset));
+  pugi::xml_node root = doc.child("synthgen_scene");
+  if (!root) throw FileError(path, "not a synthgen scene file (no <synthgen_scene> root)");
+  std::filesystem::path bin_path = std::filesystem::path(path).parent_path() / root.attribute("bin").as_string();
+  std::ifstream bin_in(bin_path, std::ios::binary);
+  if (!bin_in) throw FileError(bin_path.string(), "cannot open binary sidecar");
+  std::vector<char> bin((std::istreambuf_iterator<char>(bin_in)), std::istreambuf_iterator<char>());
+
+  auto scene = std::make_unique<Scene>();
+  Scene& s = *scene;
+  auto pad = [&](auto& vec, uint64_t id) {
+    if (id < vec.size()) throw Error("duplicate id " + std::to_string(id));
+    vec.resize(id);
+  };
+  try {
+    for (pugi::xml_node n : root.children("texture")) {
+      uint64_t id = n.attribute("id").as_ullong();
+      pad(s.m_textures, id);
+      std::string type = n.attribute("type").as_string();
+      ParamSet ps = read_params(n);
+      if (type == "embedded_image") {
+        auto px = std::make_shared<ImageData>();
+        px->width = n.attribute("width").as_int();
+        px->height = n.attribute("height").as_int();
+        px->channels = n.attribute("channels").as_int();
+        read_blob(bin, n.attribute("offset").as_ullong(), size_t(px->width) * px->height * px->channels, &px->pixels,
+                  "texture " + std::to_string(id));
+        Color scale = ps.get_color("scale", Color(1.f));
+        s.add_embedded_texture(px, scale, ps.get_string("source", ""));
+      } else {
+        s.add_texture(type, ps);
+      }
+    }
+    for (pugi::xml_node n : root.children("material")) {
+      pad(s.m_materials, n.attribute("id").as_ullong());
+      s.add_material(n.attribute("type").as_string(), read_params(n));
+    }
+    for (pugi::xml_node n : root.children("mesh")) {
+      uint64_t id = n.attribute("id").as_ullong();
+      pad(s.m_meshes, id);
+      TriangleMesh m;
+      m.name = n.attribute("name").as_string();
+      size_t nv = n.attribute("vertices").as_ullong(), nt = n.attribute("triangles").as_ullong();
+      std::string ctx = "mesh " + std::to_string(id);
+      read_blob(bin, n.attribute("positions").as_ullong(), nv, &m.positions, ctx);
+      read_blob(bin, n.attribute("indices").as_ullong(), 3 * nt, &m.indices, ctx);
+      if (n.attribute("normals")) read_blob(bin, n.attribute("normals").as_ullong(), nv, &m.normals, ctx);
+      if (n.attribute("uvs")) read_blob(bin, n.attribute("uvs").as_ullong(), nv, &m.uvs, ctx);
+      if (n.attribute("material_ids")) read_blob(bin, n.attribute("material_ids").as_ullong(), nt, &m.material_ids, ctx);
+      s.add_mesh(std::move(m));
+    }
+    for (pugi::xml_node n : root.children("instance")) {
+      uint64_t id = n.attribute("id").as_ullong();
+      pad(s.m_instances, id);
+      auto t = parse_floats(n.attribute("world_from_object").as_string(), 16, "instance " + std::to_string(id));
+      s.add_instance(n.attribute("mesh").as_uint(), Transform::from_row_major(t.data()),
+                     n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
+                     n.attribute("material").as_llong());
+    }
+    for (pugi::xml_node n : root.children("light")) {
+      pad(s.m_lights, n.attribute("id").as_ullong());
+      s.add_light(n.attribute("type").as_string(), read_params(n));
+    }
+    if (pugi::xml_node n = root.child("camera")) {
+      auto k = parse_floats(n.attribute("intrinsics").as_string(), 4, "camera");
+      auto t = parse_floats(n.attribute("world_from_camera").as_string(), 16, "camera");
+      PinholeCamera c;
+      c.fx = k[0];
+      c.fy = k[1];
+      c.cx = k[2];
+      c.cy = k[3];
+      c.width = n.attribute("width").as_uint();
+      c.height = n.attribute("height").as_uint();
+      c.world_from_camera = Transform::from_row_major(t.data());
+      s.set_camera(c);
+    }
+    pugi::xml_node counts = root.child("slots");
+    s.restore_slot_counts(counts.attribute("meshes").as_ullong(), counts.attribute("textures").as_ullong(),
+                          counts.attribute("materials").as_ullong(), counts.attribute("instances").as_ullong(),
+                          counts.attribute("lights").as_ullong());
+  } catch (const FileError&) {
+    throw;
+  } catch (const Error& e) {
+    throw FileError(path, e.what());
+  }
+  return scene;
+}
+
+}  // namespace sg

@@ -1,0 +1,88 @@
+// Lights: what next-event estimation samples.
+//
+// Explicit lights ("point", "sun", "environment") are created by name from a ParamSet;
+// area lights are made by the scene from instances with emissive materials.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+#include "core/params.h"
+#include "material/material.h"
+
+namespace sg {
+
+struct Bounds3 {
+  Vec3f lo{k_inf, k_inf, k_inf}, hi{-k_inf, -k_inf, -k_inf};
+  void expand(const Vec3f& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
+  bool empty() const { return lo.x > hi.x; }
+  Vec3f center() const { return (lo + hi) * 0.5f; }
+  float radius() const { return empty() ? 0.f : 0.5f * length(hi - lo); }
+};
+
+/// Where a light is sampled from: the shading point and its error bound.
+struct LightSampleContext {
+  Vec3f p;
+  Vec3f p_error;
+};
+
+struct LightSample {
+  Vec3f wi;          ///< unit direction from the reference point towards the light
+  Color li;          ///< radiance (or, for delta lights, irradiance-like intensity) arriving
+  float pdf = 0.f;   ///< solid-angle pdf (1 for delta lights)
+  Vec3f p_light;     ///< sampled point (finite lights)
+  Vec3f p_light_error;
+  Vec3f n_light;     ///< surface normal at the sampled point (area lights)
+  bool delta = false;
+  bool infinite = false;  ///< the shadow ray goes to infinity
+};
+
+class Light {
+ public:
+  virtual ~Light() = default;
+  virtual bool sample(const LightSampleContext& ctx, const Vec2f& u, LightSample* out) const = 0;
+  /// Approximate emitted power (luminance-weighted), for light selection.
+  virtual float power() const = 0;
+  virtual bool is_delta() const { return false; }
+  virtual bool is_infinite() const { return false; }
+  /// Infinite lights: radiance arriving along -dir, i.e. seen when looking along `dir`.
+  virtual Color le(const Vec3f& dir) const { return Color(0.f); }
+  /// Infinite lights: solid-angle pdf with which `sample` produces `dir`.
+  virtual float pdf_le(const Vec3f& dir) const { return 0.f; }
+  /// Called once per commit with the world bounds of the scene.
+  virtual void preprocess(const Bounds3& scene_bounds) {}
+};
+
+/// Creates "point", "sun" or "environment" from parameters. Throws sg::Error naming `context`.
+std::shared_ptr<Light> create_light(const std::string& type, const ParamSet& params, const std::string& context);
+
+/// One emitting triangle in world space (built by the scene at commit).
+struct EmissiveTriangle {
+  Vec3f p0, p1, p2;
+  Vec3f n;  ///< unit geometric normal, oriented like SurfaceInteraction::ng
+  Vec2f uv0, uv1, uv2;
+  Vec3f max_abs;  ///< max |coordinate| of the vertices, for error bounds
+  uint32_t prim;
+  const Material* material;
+};
+
+/// All emissive triangles of one instance; triangles are chosen by area x luminance.
+class AreaLight final : public Light {
+ public:
+  AreaLight(uint32_t inst, uint32_t prim_count, std::vector<EmissiveTriangle> tris);
+  bool sample(const LightSampleContext& ctx, const Vec2f& u, LightSample* out) const override;
+  float power() const override { return m_power; }
+  /// Area pdf of the sampling strategy at a point on triangle `prim` (0 if not emissive).
+  float area_pdf(uint32_t prim) const { return prim < m_area_pdf.size() ? m_area_pdf[prim] : 0.f; }
+
+ private:
+  uint32_t m_inst;
+  std::vector<EmissiveTriangle> m_tris;
+  std::vector<float> m_area_pdf;  // indexed by primitive
+  std::vector<float> m_cdf;       // over m_tris
+  float m_power = 0.f;
+};
+
+}  // namespace sg

@@ -1,0 +1,39 @@
+// Light "point": isotropic point light with `intensity` (W/sr per channel) at `position`.
+#include "light/light_registry.h"
+
+namespace sg {
+
+class PointLight final : public Light {
+ public:
+  PointLight(const Vec3f& pos, const Color& intensity) : m_pos(pos), m_intensity(intensity) {}
+  bool sample(const LightSampleContext& ctx, const Vec2f&, LightSample* out) const override {
+    Vec3f d = m_pos - ctx.p;
+    float dist2 = length_squared(d);
+    if (!(dist2 > 0.f)) return false;
+    out->wi = d / std::sqrt(dist2);
+    out->li = m_intensity / dist2;
+    out->pdf = 1.f;
+    out->p_light = m_pos;
+    out->p_light_error = Vec3f(0.f);
+    out->n_light = Vec3f(0.f);
+    out->delta = true;
+    out->infinite = false;
+    return true;
+  }
+  float power() const override { return 4.f * k_pi * luminance(m_intensity); }
+  bool is_delta() const override { return true; }
+
+ private:
+  Vec3f m_pos;
+  Color m_intensity;
+};
+
+std::shared_ptr<Light> create_point_light(const ParamSet& params) {
+  Vec3f pos = params.get_vec3("position", Vec3f(0.f));
+  Color intensity = params.get_color("intensity", Color(1.f)) * params.get_float("strength", 1.f);
+  if (intensity.x < 0 || intensity.y < 0 || intensity.z < 0)
+    throw Error("parameter 'intensity': components must be non-negative");
+  return std::make_shared<PointLight>(pos, intensity);
+}
+
+}  // namespace sg

@@ -1,0 +1,71 @@
+// Light "sun": a distant disc light. `direction` points from the scene towards the sun,
+// `irradiance` is W/m^2 per channel on a surface facing the sun, `angular_diameter`
+// in degrees (0.53 for the real sun; 0 makes it a delta directional light).
+#include "core/sampling.h"
+#include "light/light_registry.h"
+
+namespace sg {
+
+class SunLight final : public Light {
+ public:
+  SunLight(const Vec3f& dir, const Color& irradiance, float angular_diameter_deg)
+      : m_dir(normalize(dir)), m_frame(m_dir), m_irradiance(irradiance) {
+    float half = 0.5f * angular_diameter_deg * k_pi / 180.f;
+    m_delta = half <= 0.f;
+    if (!m_delta) {
+      m_cos_max = std::cos(half);
+      m_solid_angle = cone_solid_angle_from_half_angle(half);
+      // NOTE: a disc of uniform radiance L subtending half-angle a gives normal
+      // irradiance E = pi L sin^2(a); so L = E / (pi sin^2 a).
+      float s = std::sin(half);
+      m_radiance = irradiance / (k_pi * s * s);
+    }
+  }
+  bool sample(const LightSampleContext&, const Vec2f& u, LightSample* out) const override {
+    out->infinite = true;
+    out->p_light_error = Vec3f(0.f);
+    out->n_light = Vec3f(0.f);
+    if (m_delta) {
+      out->wi = m_dir;
+      out->li = m_irradiance;
+      out->pdf = 1.f;
+      out->delta = true;
+      return true;
+    }
+    Vec3f local = square_to_uniform_cone(u, m_cos_max);
+    out->wi = normalize(m_frame.to_world(local));
+    out->li = m_radiance;
+    out->pdf = 1.f / m_solid_angle;
+    out->delta = false;
+    return true;
+  }
+  float power() const override { return k_pi * m_radius * m_radius * luminance(m_irradiance); }
+  bool is_delta() const override { return m_delta; }
+  bool is_infinite() const override { return true; }
+  Color le(const Vec3f& dir) const override {
+    return (!m_delta && dot(dir, m_dir) >= m_cos_max) ? m_radiance : Color(0.f);
+  }
+  float pdf_le(const Vec3f& dir) const override {
+    return (!m_delta && dot(dir, m_dir) >= m_cos_max) ? 1.f / m_solid_angle : 0.f;
+  }
+  void preprocess(const Bounds3& b) override { m_radius = std::max(b.radius(), 1e-3f); }
+
+ private:
+  Vec3f m_dir;
+  Frame m_frame;
+  Color m_irradiance, m_radiance;
+  float m_cos_max = 1.f, m_solid_angle = 0.f, m_radius = 1.f;
+  bool m_delta;
+};
+
+std::shared_ptr<Light> create_sun_light(const ParamSet& params) {
+  Vec3f dir = params.get_vec3("direction", Vec3f(0.f, 0.f, 1.f));
+  if (!(length(dir) > 0.f)) throw Error("parameter 'direction': must be a non-zero vector");
+  Color e = params.get_color("irradiance", Color(1.f)) * params.get_float("strength", 1.f);
+  if (e.x < 0 || e.y < 0 || e.z < 0) throw Error("parameter 'irradiance': components must be non-negative");
+  float diam = params.get_float("angular_diameter", 0.53f);
+  if (!(diam >= 0.f && diam < 90.f)) throw Error("parameter 'angular_diameter': must lie in [0, 90) degrees");
+  return std::make_shared<SunLight>(dir, e, diam);
+}
+
+}  // namespace sg

@@ -1,0 +1,53 @@
+// Material "emissive": an area emitter with radiance `radiance` * `strength`
+// (W / (m^2 sr) per channel) leaving the front face (the side the geometric normal
+// points to), or both faces with `two_sided`. It may also reflect light diffusely
+// with `albedo` (default 0), like a frosted lamp cover.
+#include "core/error.h"
+#include "material/lambert.h"
+#include "material/material_registry.h"
+
+namespace sg {
+
+class EmissiveMaterial final : public Material {
+ public:
+  EmissiveMaterial(const Color& radiance, std::shared_ptr<Texture> albedo, bool two_sided)
+      : m_radiance(radiance), m_albedo(std::move(albedo)), m_two_sided(two_sided) {
+    m_reflects = !is_black(m_albedo->average());
+  }
+  Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
+    return m_reflects ? lambert::eval(si, wo, wi, m_albedo->eval(si.uv)) : Color(0.f);
+  }
+  float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
+    return m_reflects ? lambert::pdf(si, wo, wi) : 0.f;
+  }
+  bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
+    return m_reflects && lambert::sample(si, wo, u, m_albedo->eval(si.uv), out);
+  }
+  Color albedo(const SurfaceInteraction& si) const override { return m_albedo->eval(si.uv); }
+  uint32_t flags() const override { return m_reflects ? (k_bsdf_diffuse | k_bsdf_reflection) : k_bsdf_none; }
+
+  Color emission(const SurfaceInteraction& si, const Vec3f& wo) const override {
+    if (m_two_sided || dot(si.ng, wo) > 0.f) return m_radiance;
+    return Color(0.f);
+  }
+  bool is_emissive() const override { return !is_black(m_radiance); }
+  Color average_emission() const override { return m_radiance; }
+  bool two_sided_emission() const override { return m_two_sided; }
+
+ private:
+  Color m_radiance;
+  std::shared_ptr<Texture> m_albedo;
+  bool m_two_sided;
+  bool m_reflects;
+};
+
+std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const TextureLookup& textures) {
+  Color radiance = params.get_color("radiance", Color(1.f)) * params.get_float("strength", 1.f);
+  if (radiance.x < 0.f || radiance.y < 0.f || radiance.z < 0.f)
+    throw Error("parameter 'radiance': components must be non-negative");
+  auto albedo = get_color_texture(params, "albedo", Color(0.f), textures);
+  bool two_sided = params.get_bool("two_sided", false);
+  return std::make_shared<EmissiveMaterial>(radiance, albedo, two_sided);
+}
+
+}  // namespace sg

@@ -1,0 +1,81 @@
+// Materials: the BSDF interface seen by the integrator.
+//
+// Directions are world-space unit vectors pointing away from the surface.
+// `eval` returns f(wo, wi) * |cos(theta_i)| (cosine foreshortening included, as in
+// Mitsuba 3), `pdf` the solid-angle density of `sample`, and `sample` returns the
+// weight f * |cos| / pdf. A later material (conductor, dielectric, coated, mix)
+// implements the same four calls; the integrator never looks inside a material.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "core/math.h"
+#include "core/params.h"
+#include "texture/texture.h"
+
+namespace sg {
+
+/// Local geometry at a ray hit, everything in world space.
+struct SurfaceInteraction {
+  Vec3f p;        ///< position
+  Vec3f p_error;  ///< conservative absolute floating-point error bound of `p`
+  Vec3f ng;       ///< unit geometric normal (follows the mesh winding / handedness)
+  Vec3f ns;       ///< unit shading normal, in the same hemisphere as `ng`
+  Vec2f uv;       ///< texture coordinates
+  uint32_t inst = 0, prim = 0;
+};
+
+enum BsdfFlags : uint32_t {
+  k_bsdf_none = 0,
+  k_bsdf_diffuse = 1u << 0,
+  k_bsdf_glossy = 1u << 1,
+  k_bsdf_delta = 1u << 2,  ///< Dirac lobe: excluded from light sampling and MIS
+  k_bsdf_reflection = 1u << 3,
+  k_bsdf_transmission = 1u << 4,
+};
+
+struct BsdfSample {
+  Vec3f wi;
+  Color weight;  ///< f * |cos| / pdf
+  float pdf = 0.f;
+  uint32_t flags = 0;
+};
+
+class Material {
+ public:
+  virtual ~Material() = default;
+  virtual Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const = 0;
+  virtual float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const = 0;
+  /// `u_lobe` selects a lobe, `u` warps the direction. Returns false when no direction
+  /// is produced (the path ends).
+  virtual bool sample(const SurfaceInteraction& si, const Vec3f& wo, float u_lobe, const Vec2f& u,
+                      BsdfSample* out) const = 0;
+  /// Diffuse-equivalent reflectance for the albedo output (a denoiser feature).
+  virtual Color albedo(const SurfaceInteraction& si) const = 0;
+  /// Union of BsdfFlags of all lobes; materials without non-delta lobes skip light sampling.
+  virtual uint32_t flags() const = 0;
+
+  /// Emitted radiance towards `wo` (zero for non-emitters).
+  virtual Color emission(const SurfaceInteraction& si, const Vec3f& wo) const { return Color(0.f); }
+  virtual bool is_emissive() const { return false; }
+  /// Mean emitted radiance over the surface (for light power estimates).
+  virtual Color average_emission() const { return Color(0.f); }
+  /// True when emission leaves both faces.
+  virtual bool two_sided_emission() const { return false; }
+};
+
+using TextureLookup = std::function<std::shared_ptr<Texture>(uint32_t id)>;
+
+/// Creates a material plugin by registry key ("diffuse", "emissive").
+/// Throws sg::Error naming `context` for unknown types, unknown or ill-typed parameters.
+std::shared_ptr<Material> create_material(const std::string& type, const ParamSet& params,
+                                          const TextureLookup& textures, const std::string& context);
+
+/// A colour parameter given either as a constant (scalar / RGB) or a TextureRef.
+std::shared_ptr<Texture> get_color_texture(const ParamSet& params, const std::string& name, const Color& def,
+                                           const TextureLookup& textures);
+
+}  // namespace sg

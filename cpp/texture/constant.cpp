@@ -1,0 +1,26 @@
+// Texture "constant": the same value everywhere.
+#include "core/error.h"
+#include "texture/texture.h"
+#include "texture/texture_registry.h"
+
+namespace sg {
+
+class ConstantTexture final : public Texture {
+ public:
+  explicit ConstantTexture(const Color& v) : m_value(v) {}
+  Color eval(const Vec2f&) const override { return m_value; }
+  Color average() const override { return m_value; }
+
+ private:
+  Color m_value;
+};
+
+std::shared_ptr<Texture> make_constant_texture(const Color& value) {
+  return std::make_shared<ConstantTexture>(value);
+}
+
+std::shared_ptr<Texture> create_constant_texture(const ParamSet& params) {
+  return make_constant_texture(params.get_color("value", Color(1.f)));
+}
+
+}  // namespace sg

@@ -1,0 +1,11 @@
+// Internal: factory functions of the texture plugins.
+#pragma once
+#include <memory>
+
+#include "core/params.h"
+#include "texture/texture.h"
+
+namespace sg {
+std::shared_ptr<Texture> create_constant_texture(const ParamSet& params);
+std::shared_ptr<Texture> create_image_texture(const ParamSet& params);
+}  // namespace sg
