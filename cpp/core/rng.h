@@ -27,6 +27,7 @@ inline float bits_to_unit_float(uint32_t bits) { return float(bits >> 8) * 0x1p-
 /// Counter-based sampler for one (seed, pixel, sample) triple.
 class PixelSampler {
  public:
+  PixelSampler() : m_key(0) {}
   PixelSampler(uint64_t seed, uint64_t pixel_index, uint32_t sample_index)
       : m_key(mix64(mix64(mix64(seed) ^ pixel_index) ^ sample_index)) {}
 

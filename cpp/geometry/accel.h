@@ -19,6 +19,27 @@ struct RayHit {
   uint32_t inst = 0;
 };
 
+/// Number of rays traced together with Embree's packet traversal.
+constexpr int k_packet_size = 16;
+
+/// Up to k_packet_size rays traced together. Lanes with valid[i] == 0 are ignored.
+struct RayPacket {
+  float ox[k_packet_size], oy[k_packet_size], oz[k_packet_size], dx[k_packet_size], dy[k_packet_size],
+      dz[k_packet_size], t_max[k_packet_size];
+  int valid[k_packet_size];
+  void set(int i, const Ray& r) {
+    ox[i] = r.o.x; oy[i] = r.o.y; oz[i] = r.o.z;
+    dx[i] = r.d.x; dy[i] = r.d.y; dz[i] = r.d.z;
+    t_max[i] = r.t_max;
+    valid[i] = -1;
+  }
+};
+
+struct HitPacket {
+  RayHit hit[k_packet_size];
+  bool found[k_packet_size];
+};
+
 class Accel {
  public:
   Accel();
@@ -37,6 +58,9 @@ class Accel {
 
   bool intersect(const Ray& ray, RayHit* hit) const;
   bool occluded(const Ray& ray) const;
+  /// Packet versions: identical results per lane to intersect() / occluded().
+  void intersect_packet(const RayPacket& rays, HitPacket* hits) const;
+  void occluded_packet(const RayPacket& rays, bool occluded[k_packet_size]) const;
 
   /// Number of bottom-level (per-mesh) BVH builds since construction.
   uint64_t mesh_builds() const { return m_mesh_builds; }

@@ -31,108 +31,213 @@ struct PathCounters {
   uint64_t nan = 0;
 };
 
+/// State of one camera path. Paths of the same pixel advance together in packets of
+/// up to k_packet_size so that Embree can trace their rays with packet traversal; every lane does
+/// exactly what a scalar path tracer would do, so results do not depend on packing.
+struct PathState {
+  Ray ray;
+  Color L{0.f}, beta{1.f};
+  Color shadow_contrib{0.f};  ///< NEE contribution, added if the shadow ray is unoccluded
+  float prev_pdf = 0.f;
+  uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
+  uint32_t bounce = 0;
+  bool prev_delta = true;  ///< the camera "sampled" the first direction
+  bool active = true;
+  bool hit_geometry = false;
+};
+
 class PathTracer {
  public:
   PathTracer(const RenderScene& scene, const RenderSettings& settings) : m_scene(scene), m_s(settings) {}
 
-  /// Radiance of one camera path. `hit_geometry` reports whether the camera ray hit.
-  Color trace(Ray ray, PixelSampler& sampler, PathCounters& counters, bool* hit_geometry) const {
+  /// The current ray escaped: infinite lights, MIS-weighted against light sampling.
+  void on_miss(PathState& st) const {
     const RenderScene& sc = m_scene;
-    Color L(0.f), beta(1.f);
-    float prev_pdf = 0.f;
-    bool prev_delta = true;  // the camera "sampled" the first direction
-    uint32_t segments = 1;
-    *hit_geometry = false;
-    for (uint32_t bounce = 0;; ++bounce) {
-      RayHit hit;
-      ++counters.rays;
-      if (!sc.accel->intersect(ray, &hit)) {
-        // Escaped: infinite lights, MIS-weighted against light sampling.
-        for (uint32_t li : sc.infinite_lights) {
-          const Light* light = sc.lights[li];
-          Color le = light->le(ray.d);
-          if (is_black(le)) continue;
-          float w = 1.f;
-          if (!prev_delta) w = power_heuristic(prev_pdf, sc.light_pick.pmf(li) * light->pdf_le(ray.d));
-          L += beta * le * w;
-        }
-        break;
-      }
-      if (bounce == 0) *hit_geometry = true;
-      const InstanceRecord& inst = sc.instances[hit.inst];
-      SurfaceInteraction si = make_interaction(inst, hit);
-      const Material* mat = sc.material_of(inst, hit.prim);
-      Vec3f wo = -ray.d;
-
-      // Emission seen by this segment.
-      if (mat->is_emissive()) {
-        Color le = mat->emission(si, wo);
-        if (!is_black(le)) {
-          float w = 1.f;
-          if (!prev_delta && inst.light) {
-            float cos_l = std::fabs(dot(si.ng, wo));
-            float pdf_light = sc.light_pick.pmf(uint32_t(inst.light_index)) * inst.light->area_pdf(hit.prim) *
-                              hit.t * hit.t / cos_l;
-            w = power_heuristic(prev_pdf, pdf_light);
-          }
-          L += beta * le * w;
-        }
-      }
-      if (segments >= m_s.max_depth) break;
-      uint32_t flags = mat->flags();
-      if (flags == k_bsdf_none) break;
-      uint32_t base = 2 + bounce * k_dims_per_vertex;
-
-      // Next-event estimation.
-      if ((flags & ~uint32_t(k_bsdf_delta)) && !sc.lights.empty()) {
-        float pick_pmf;
-        size_t li = sc.light_pick.sample(sampler.get(base), &pick_pmf);
-        const Light* light = sc.lights[li];
-        LightSample ls;
-        LightSampleContext ctx{si.p, si.p_error};
-        if (light->sample(ctx, Vec2f(sampler.get(base + 1), sampler.get(base + 2)), &ls)) {
-          Color f = mat->eval(si, wo, ls.wi);
-          if (!is_black(f)) {
-            Ray shadow;
-            shadow.o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
-            if (ls.infinite) {
-              shadow.d = ls.wi;
-              shadow.t_max = k_inf;
-            } else {
-              Vec3f target = ls.delta ? ls.p_light
-                                      : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
-              shadow.d = target - shadow.o;
-              shadow.t_max = 1.f - k_shadow_epsilon;
-            }
-            ++counters.rays;
-            if (!sc.accel->occluded(shadow)) {
-              float light_pdf = pick_pmf * ls.pdf;
-              float w = ls.delta ? 1.f : power_heuristic(light_pdf, mat->pdf(si, wo, ls.wi));
-              L += beta * f * ls.li * (w / light_pdf);
-            }
-          }
-        }
-      }
-
-      // BSDF sampling.
-      BsdfSample bs;
-      if (!mat->sample(si, wo, sampler.get(base + 3), Vec2f(sampler.get(base + 4), sampler.get(base + 5)), &bs))
-        break;
-      beta *= bs.weight;
-      prev_pdf = bs.pdf;
-      prev_delta = (bs.flags & k_bsdf_delta) != 0;
-      ++segments;
-      if (is_black(beta)) break;
-
-      // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
-      if (segments > m_s.rr_depth) {
-        float q = std::max(0.05f, 1.f - max_component(beta));
-        if (sampler.get(base + 6) < q) break;
-        beta *= 1.f / (1.f - q);
-      }
-      ray = spawn_ray(si, bs.wi);
+    for (uint32_t li : sc.infinite_lights) {
+      const Light* light = sc.lights[li];
+      Color le = light->le(st.ray.d);
+      if (is_black(le)) continue;
+      float w = 1.f;
+      if (!st.prev_delta) w = power_heuristic(st.prev_pdf, sc.light_pick.pmf(li) * light->pdf_le(st.ray.d));
+      st.L += st.beta * le * w;
     }
-    return L;
+    st.active = false;
+  }
+
+  /// The current ray hit a surface: add emission, prepare a shadow ray for next-event
+  /// estimation (returns true and fills `shadow`), and sample the next direction (or end
+  /// the path by clearing `st.active`).
+  bool on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, Ray* shadow) const {
+    const RenderScene& sc = m_scene;
+    if (st.bounce == 0) st.hit_geometry = true;
+    const InstanceRecord& inst = sc.instances[hit.inst];
+    SurfaceInteraction si = make_interaction(inst, hit);
+    const Material* mat = sc.material_of(inst, hit.prim);
+    Vec3f wo = -st.ray.d;
+    bool shadow_requested = false;
+
+    // Emission seen by this segment.
+    if (mat->is_emissive()) {
+      Color le = mat->emission(si, wo);
+      if (!is_black(le)) {
+        float w = 1.f;
+        if (!st.prev_delta && inst.light) {
+          float cos_l = std::fabs(dot(si.ng, wo));
+          float pdf_light = sc.light_pick.pmf(uint32_t(inst.light_index)) * inst.light->area_pdf(hit.prim) *
+                            hit.t * hit.t / cos_l;
+          w = power_heuristic(st.prev_pdf, pdf_light);
+        }
+        st.L += st.beta * le * w;
+      }
+    }
+    uint32_t flags = mat->flags();
+    if (st.segments >= m_s.max_depth || flags == k_bsdf_none) {
+      st.active = false;
+      return false;
+    }
+    uint32_t base = 2 + st.bounce * k_dims_per_vertex;
+
+    // Next-event estimation: sample a light, defer the shadow ray.
+    if ((flags & ~uint32_t(k_bsdf_delta)) && !sc.lights.empty()) {
+      float pick_pmf;
+      size_t li = sc.light_pick.sample(sampler.get(base), &pick_pmf);
+      const Light* light = sc.lights[li];
+      LightSample ls;
+      LightSampleContext ctx{si.p, si.p_error};
+      if (light->sample(ctx, Vec2f(sampler.get(base + 1), sampler.get(base + 2)), &ls)) {
+        Color f = mat->eval(si, wo, ls.wi);
+        if (!is_black(f)) {
+          shadow->o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
+          if (ls.infinite) {
+            shadow->d = ls.wi;
+            shadow->t_max = k_inf;
+          } else {
+            Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
+            shadow->d = target - shadow->o;
+            shadow->t_max = 1.f - k_shadow_epsilon;
+          }
+          float light_pdf = pick_pmf * ls.pdf;
+          float w = ls.delta ? 1.f : power_heuristic(light_pdf, mat->pdf(si, wo, ls.wi));
+          st.shadow_contrib = st.beta * f * ls.li * (w / light_pdf);
+          shadow_requested = true;
+        }
+      }
+    }
+
+    // BSDF sampling.
+    BsdfSample bs;
+    if (!mat->sample(si, wo, sampler.get(base + 3), Vec2f(sampler.get(base + 4), sampler.get(base + 5)), &bs)) {
+      st.active = false;
+      return shadow_requested;
+    }
+    st.beta *= bs.weight;
+    st.prev_pdf = bs.pdf;
+    st.prev_delta = (bs.flags & k_bsdf_delta) != 0;
+    ++st.segments;
+    ++st.bounce;
+    if (is_black(st.beta)) {
+      st.active = false;
+      return shadow_requested;
+    }
+    // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
+    if (st.segments > m_s.rr_depth) {
+      float q = std::max(0.05f, 1.f - max_component(st.beta));
+      if (sampler.get(base + 6) < q) {
+        st.active = false;
+        return shadow_requested;
+      }
+      st.beta *= 1.f / (1.f - q);
+    }
+    st.ray = spawn_ray(si, bs.wi);
+    return shadow_requested;
+  }
+
+  /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size; returns the sum of the valid
+  /// sample radiances, the number of valid samples and of camera-ray hits.
+  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, Color* sum, uint32_t* valid, uint32_t* hits,
+                    PathCounters& counters) const {
+    const RenderScene& sc = m_scene;
+    uint64_t pixel = uint64_t(y) * sc.camera.width + x;
+    constexpr int W = k_packet_size;
+    PathState st[W];
+    PixelSampler samplers[W];
+    for (uint32_t i = 0; i < uint32_t(W); ++i) {
+      samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i);
+      if (i >= n) {
+        st[i].active = false;
+        continue;
+      }
+      st[i].ray = sc.camera.generate_ray(float(x) + samplers[i].get(0), float(y) + samplers[i].get(1));
+    }
+    for (;;) {
+      RayPacket rays;
+      uint32_t n_active = 0;
+      for (int i = 0; i < W; ++i) {
+        if (st[i].active) {
+          rays.set(i, st[i].ray);
+          ++n_active;
+        } else {
+          rays.valid[i] = 0;
+        }
+      }
+      if (!n_active) break;
+      HitPacket hp;
+      // NOTE: a packet query costs about as much as a few single-ray queries, so sparse
+      // packets (spp < 4, or the long tail of paths) use single rays.
+      if (n_active <= 3) {
+        for (int i = 0; i < W; ++i) {
+          hp.found[i] = false;
+          if (st[i].active) hp.found[i] = sc.accel->intersect(st[i].ray, &hp.hit[i]);
+        }
+      } else {
+        sc.accel->intersect_packet(rays, &hp);
+      }
+      counters.rays += n_active;
+      RayPacket shadows;
+      uint32_t n_shadow = 0;
+      for (int i = 0; i < W; ++i) {
+        shadows.valid[i] = 0;
+        if (!st[i].active) continue;
+        if (!hp.found[i]) {
+          on_miss(st[i]);
+          continue;
+        }
+        Ray shadow;
+        if (on_hit(st[i], hp.hit[i], samplers[i], &shadow)) {
+          shadows.set(i, shadow);
+          ++n_shadow;
+        }
+      }
+      if (n_shadow) {
+        bool occluded[W];
+        if (n_shadow <= 3) {
+          for (int i = 0; i < W; ++i) {
+            occluded[i] = false;
+            if (shadows.valid[i]) {
+              Ray r;
+              r.o = Vec3f(shadows.ox[i], shadows.oy[i], shadows.oz[i]);
+              r.d = Vec3f(shadows.dx[i], shadows.dy[i], shadows.dz[i]);
+              r.t_max = shadows.t_max[i];
+              occluded[i] = sc.accel->occluded(r);
+            }
+          }
+        } else {
+          sc.accel->occluded_packet(shadows, occluded);
+        }
+        counters.rays += n_shadow;
+        for (int i = 0; i < W; ++i)
+          if (shadows.valid[i] && !occluded[i]) st[i].L += st[i].shadow_contrib;
+      }
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+      *hits += st[i].hit_geometry;
+      if (!is_finite(st[i].L)) {
+        ++counters.nan;
+        continue;
+      }
+      *sum += st[i].L;
+      ++*valid;
+    }
   }
 
   /// Labels from the camera ray through the pixel centre.
@@ -189,20 +294,8 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
               pt.labels(x, y, film, c);
               Color sum(0.f);
               uint32_t valid = 0, hits = 0;
-              for (uint32_t s = 0; s < settings.spp; ++s) {
-                PixelSampler sampler(settings.seed, pixel, s);
-                float u = float(x) + sampler.get(0), v = float(y) + sampler.get(1);
-                Ray ray = scene.camera.generate_ray(u, v);
-                bool hit;
-                Color L = pt.trace(ray, sampler, c, &hit);
-                hits += hit;
-                if (!is_finite(L)) {
-                  ++c.nan;
-                  continue;
-                }
-                sum += L;
-                ++valid;
-              }
+              for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
+                pt.trace_packet(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &sum, &valid, &hits, c);
               if (valid) sum = sum / float(valid);
               film->rgb[3 * pixel] = sum.x;
               film->rgb[3 * pixel + 1] = sum.y;

@@ -1,12 +1,19 @@
-// Image reading and writing through OpenImageIO (the only file using its API: image_io.cpp).
+// Image reading and writing through OpenImageIO.
+//
+// OpenImageIO and its ~260 shared-library dependencies take a quarter of a second to
+// load, so they are not linked into the core: image_io.cpp (the only file using the
+// OIIO API) is built as the plugin `libsynthgen_oiio.so`, which image_io_loader.cpp
+// opens with dlopen on the first image read or write. Scenes without image files
+// never pay for it.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
 namespace sg {
 
-enum class ColorSpace { Auto, SRGB, Linear };
+enum class ColorSpace { Auto = 0, SRGB = 1, Linear = 2 };
 
 /// Float pixels, row-major, top row first, `channels` interleaved values per pixel.
 struct ImageData {
@@ -19,7 +26,24 @@ struct ImageData {
 /// Throws sg::FileError naming the file on failure.
 ImageData load_image(const std::string& path, ColorSpace space);
 
+/// Decodes an image held in memory (e.g. embedded in a GLB file), without any colour
+/// conversion. `format_hint` is a file extension such as "png". Throws sg::FileError
+/// naming `what`.
+ImageData load_image_from_memory(const void* data, size_t size, const std::string& format_hint,
+                                 const std::string& what);
+
 /// Writes float pixels; 8/16-bit formats are chosen by `bits` (0 = float).
 void save_image(const std::string& path, const ImageData& image, int bits);
 
+/// Function table exported by the plugin (C linkage; no exceptions cross it).
+struct ImageIoApi {
+  int version;
+  bool (*load)(const char* path, int space, ImageData* out, std::string* error);
+  bool (*load_memory)(const void* data, size_t size, const char* hint, ImageData* out, std::string* error);
+  bool (*save)(const char* path, const ImageData* image, int bits, std::string* error);
+};
+constexpr int k_image_io_api_version = 1;
+
 }  // namespace sg
+
+extern "C" const sg::ImageIoApi* synthgen_image_io_api();

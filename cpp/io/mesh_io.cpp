@@ -1,8 +1,5 @@
 #include "io/mesh_io.h"
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
-
 #include <assimp/Importer.hpp>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -33,18 +30,7 @@ static ImageData decode_embedded(const aiTexture* tex, const std::string& path) 
     return img;
   }
   std::string hint = tex->achFormatHint[0] ? std::string(tex->achFormatHint) : "png";
-  OIIO::Filesystem::IOMemReader reader(tex->pcData, tex->mWidth);
-  OIIO::ImageSpec config;
-  auto in = OIIO::ImageInput::open("embedded." + hint, &config, &reader);
-  if (!in) throw FileError(path, "cannot decode embedded texture (" + OIIO::geterror() + ")");
-  const auto& spec = in->spec();
-  img.width = spec.width;
-  img.height = spec.height;
-  img.channels = spec.nchannels;
-  img.pixels.resize(size_t(img.width) * img.height * img.channels);
-  if (!in->read_image(0, 0, 0, img.channels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-    throw FileError(path, "cannot decode embedded texture (" + in->geterror() + ")");
-  return img;
+  return load_image_from_memory(tex->pcData, tex->mWidth, hint, path + " (embedded texture)");
 }
 
 ImportedModel import_mesh_file(const std::string& path) {
