@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "integrator/interaction.h"
 
 namespace sg {
 
@@ -266,6 +267,16 @@ void Scene::build_render_scene() {
     r.override_material = e->material_id >= 0;
     r.material = r.override_material ? m_materials[size_t(e->material_id)]->object.get() : m_default_material.get();
     r.triangle_materials = me.triangle_materials.empty() ? nullptr : &me.triangle_materials;
+    {
+      const auto& M = e->world_from_object.m;
+      float row_norm = 0.f, t_max = 0.f;
+      for (int row = 0; row < 3; ++row) {
+        row_norm = std::max(row_norm, std::fabs(M[4 * row]) + std::fabs(M[4 * row + 1]) + std::fabs(M[4 * row + 2]));
+        t_max = std::max(t_max, std::fabs(M[4 * row + 3]));
+      }
+      r.error_scale = gamma_n(7) * row_norm;
+      r.error_offset = gamma_n(7) * t_max;
+    }
     // World bounds from the eight transformed corners of the object bounds.
     for (int c = 0; c < 8; ++c) {
       Vec3f p((c & 1) ? me.bounds.hi.x : me.bounds.lo.x, (c & 2) ? me.bounds.hi.y : me.bounds.lo.y,
@@ -318,6 +329,7 @@ void Scene::build_render_scene() {
     if (e->object->is_infinite()) rs.infinite_lights.push_back(uint32_t(rs.lights.size()));
     rs.lights.push_back(e->object.get());
   }
+  rs.has_hittable_emitters = !m_area_lights.empty() || !rs.infinite_lights.empty();
   std::vector<float> power;
   for (const Light* l : rs.lights) power.push_back(std::max(l->power(), 0.f));
   rs.light_pick = Distribution1D(power);

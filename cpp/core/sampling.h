@@ -25,11 +25,14 @@ inline Vec2f square_to_uniform_disk_concentric(Vec2f u) {
   return {r * std::cos(theta), r * std::sin(theta)};
 }
 
-/// Cosine-weighted hemisphere around +z (Malley's method). pdf = cos(theta) / pi.
+/// Cosine-weighted hemisphere around +z. pdf = cos(theta) / pi.
+/// NOTE: Malley's method (project a uniform disk sample up to the hemisphere) with the
+/// polar disk map r = sqrt(u.x), phi = 2 pi u.y; it needs no division or branch, unlike
+/// the concentric map, and with independent random samples the two are equivalent.
 inline Vec3f square_to_cosine_hemisphere(Vec2f u) {
-  Vec2f d = square_to_uniform_disk_concentric(u);
-  float z = std::sqrt(std::max(0.f, 1.f - d.x * d.x - d.y * d.y));
-  return {d.x, d.y, z};
+  float r = std::sqrt(u.x);
+  float phi = 2.f * k_pi * u.y;
+  return {r * std::cos(phi), r * std::sin(phi), std::sqrt(std::max(0.f, 1.f - u.x))};
 }
 inline float cosine_hemisphere_pdf(const Vec3f& v) { return v.z > 0.f ? v.z * k_inv_pi : 0.f; }
 

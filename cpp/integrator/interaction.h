@@ -45,14 +45,10 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   // gamma(3)(|M||p| + |t|) per axis. Embree's watertight test and its transformation of
   // the ray into instance space make errors of the order of the *largest* coordinate of
   // the triangle on every axis (an axis-aligned plane at y = 0 still has errors from x and
-  // z), so the per-axis bound is replaced by its maximum over axes and vertices.
-  Vec3f abs_row0(std::fabs(T.m[0]), std::fabs(T.m[1]), std::fabs(T.m[2]));
-  Vec3f abs_row1(std::fabs(T.m[4]), std::fabs(T.m[5]), std::fabs(T.m[6]));
-  Vec3f abs_row2(std::fabs(T.m[8]), std::fabs(T.m[9]), std::fabs(T.m[10]));
-  Vec3f ap = vmax(vabs(p0), vmax(vabs(p1), vabs(p2)));
-  Vec3f tr(std::fabs(T.m[3]), std::fabs(T.m[7]), std::fabs(T.m[11]));
-  Vec3f mp(dot(abs_row0, ap), dot(abs_row1, ap), dot(abs_row2, ap));
-  si.p_error = Vec3f(max_component(mp + tr) * gamma_n(7));
+  // z), so the bound is taken as gamma(7) (||M||_inf max_i |p_i|_inf + |t|_inf) on every
+  // axis, with the matrix terms precomputed per instance (InstanceRecord::error_scale).
+  float max_abs = max_component(vmax(vabs(p0), vmax(vabs(p1), vabs(p2))));
+  si.p_error = Vec3f(inst.error_scale * max_abs + inst.error_offset);
   Vec3f ng_o = cross(p1 - p0, p2 - p0);
   si.ng = normalize(T.apply_normal(ng_o));
   if (!m.normals.empty()) {

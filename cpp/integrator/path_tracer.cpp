@@ -135,7 +135,8 @@ class PathTracer {
     st.prev_delta = (bs.flags & k_bsdf_delta) != 0;
     ++st.segments;
     ++st.bounce;
-    if (is_black(st.beta)) {
+    // The next ray could only find emission; without hittable emitters it is not traced.
+    if (is_black(st.beta) || (st.segments >= m_s.max_depth && !sc.has_hittable_emitters)) {
       st.active = false;
       return shadow_requested;
     }

@@ -25,6 +25,9 @@ struct InstanceRecord {
   const std::vector<const Material*>* triangle_materials = nullptr;  ///< per triangle, may be null
   const AreaLight* light = nullptr;
   int32_t light_index = -1;
+  /// Hit-point error bound = error_scale * max|object vertex coordinate| + error_offset
+  /// (see make_interaction); precomputed from world_from_object at commit.
+  float error_scale = 0.f, error_offset = 0.f;
 };
 
 struct RenderScene {
@@ -35,6 +38,9 @@ struct RenderScene {
   std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
   PinholeCamera camera;
   Bounds3 bounds;
+  /// False when no ray can pick up emission by hitting something (no emissive surfaces,
+  /// no infinite lights): paths then end right after their last light sample.
+  bool has_hittable_emitters = false;
 
   const Material* material_of(const InstanceRecord& inst, uint32_t prim) const {
     if (!inst.override_material && inst.triangle_materials) {
