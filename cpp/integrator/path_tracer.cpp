@@ -281,7 +281,9 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
   PathTracer pt(scene, settings);
   std::atomic<uint64_t> rays{0}, nans{0};
   auto t0 = std::chrono::steady_clock::now();
-  int threads = settings.threads ? int(settings.threads) : tbb::this_task_arena::max_concurrency();
+  // More threads than hardware threads cannot help (and TBB would warn): clamp.
+  int hw = tbb::this_task_arena::max_concurrency();
+  int threads = settings.threads ? std::min(int(settings.threads), hw) : hw;
   tbb::task_arena arena(threads);
   const uint32_t ts = settings.tile_size;
   arena.execute([&] {

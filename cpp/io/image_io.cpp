@@ -73,6 +73,10 @@ bool load_memory(const void* data, size_t size, const char* hint, ImageData* img
   try {
     OIIO::Filesystem::IOMemReader reader(data, size);
     OIIO::ImageSpec config;
+    // NOTE: OIIO 2.4's format readers pick the proxy up from the "oiio:ioproxy" config
+    // attribute; the ioproxy argument of ImageInput::open alone does not reach them.
+    void* proxy = &reader;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
     auto in = OIIO::ImageInput::open(std::string("embedded.") + hint, &config, &reader);
     if (!in) {
       *error = "cannot decode embedded image (" + OIIO::geterror() + ")";

@@ -4,7 +4,11 @@
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "core/error.h"
 
@@ -33,10 +37,39 @@ static ImageData decode_embedded(const aiTexture* tex, const std::string& path) 
   return load_image_from_memory(tex->pcData, tex->mWidth, hint, path + " (embedded texture)");
 }
 
+// assimp 5.2's OBJ parser silently drops a "v" line whose first coordinate is "nan",
+// shifting all later vertex indices. OBJ vertex lines are therefore validated here first.
+static void check_obj_vertices(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".obj") return;
+  std::ifstream in(path);
+  if (!in) throw FileError(path, "cannot open file");
+  std::string line;
+  size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    size_t i = line.find_first_not_of(" \t");
+    if (i == std::string::npos || line.compare(i, 2, "v ") != 0) continue;
+    const char* p = line.c_str() + i + 2;
+    for (int k = 0; k < 3; ++k) {
+      char* end = nullptr;
+      float v = std::strtof(p, &end);
+      if (end == p)
+        throw FileError(path, "line " + std::to_string(line_no) + ": vertex coordinate " + std::to_string(k + 1) +
+                                  " is not a number");
+      if (!std::isfinite(v))
+        throw FileError(path, "line " + std::to_string(line_no) + ": vertex has a non-finite (NaN or inf) coordinate");
+      p = end;
+    }
+  }
+}
+
 ImportedModel import_mesh_file(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw FileError(path, "file not found");
   if (fs::is_directory(path, ec)) throw FileError(path, "is a directory, not a mesh file");
+  check_obj_vertices(path);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene = importer.ReadFile(
