@@ -48,6 +48,7 @@ PinholeCamera PinholeCamera::from_fov(float vfov_degrees, uint32_t width, uint32
   c.width = width;
   c.height = height;
   c.world_from_camera = world_from_camera;
+  c.validate();
   return c;
 }
 

@@ -14,13 +14,17 @@ from ._core import (  # noqa: F401
     TextureRef,
     __version__,
 )
+from .scene_file import SceneFileError, build_scene, load_scene  # noqa: F401
 
 __all__ = [
     "FileError",
     "PinholeCamera",
     "RenderResult",
     "Scene",
+    "SceneFileError",
     "SynthgenError",
     "TextureRef",
     "__version__",
+    "build_scene",
+    "load_scene",
 ]
