@@ -3,6 +3,7 @@ the tile size, bit for bit, for every output."""
 from __future__ import annotations
 
 import hashlib
+import os
 
 import numpy as np
 import pytest
@@ -72,7 +73,8 @@ def test_scene_is_nontrivial(reference_render):
 @pytest.mark.parametrize("threads", [2, 4])
 def test_thread_count_does_not_change_any_output(scene, reference_render, threads):
     r = scene.render(seed=5, threads=threads, **SETTINGS)
-    assert r.stats["threads"] == threads
+    # More threads than hardware threads are clamped to the hardware.
+    assert r.stats["threads"] == min(threads, len(os.sched_getaffinity(0)))
     assert _digests(r) == _digests(reference_render)
 
 
