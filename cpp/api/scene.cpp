@@ -310,7 +310,7 @@ void Scene::build_render_scene() {
         et.uv1 = Vec2f(1, 0);
         et.uv2 = Vec2f(0, 1);
       }
-      et.max_abs = vmax(vabs(et.p0), vmax(vabs(et.p1), vabs(et.p2)));
+      et.p_error = emissive_triangle_error(r, m.positions[i0], m.positions[i1], m.positions[i2], et.p0, et.p1, et.p2);
       et.prim = uint32_t(t);
       et.material = mat;
       tris.push_back(et);

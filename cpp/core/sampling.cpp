@@ -30,6 +30,11 @@ Distribution1D::Distribution1D(const std::vector<float>& weights) {
 }
 
 size_t Distribution1D::sample(float u, float* pmf_out, float* u_remapped) const {
+  if (m_pmf.size() == 1) {
+    if (pmf_out) *pmf_out = 1.f;
+    if (u_remapped) *u_remapped = u;
+    return 0;
+  }
   // Largest i with cdf[i] <= u, skipping zero-weight bins.
   auto it = std::upper_bound(m_cdf.begin(), m_cdf.end(), u);
   size_t i = size_t(std::max<ptrdiff_t>(0, (it - m_cdf.begin()) - 1));

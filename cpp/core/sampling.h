@@ -45,23 +45,33 @@ inline Vec3f square_to_uniform_sphere(Vec2f u) {
 }
 inline float uniform_sphere_pdf() { return k_inv_four_pi; }
 
-/// Uniform direction inside the cone of directions within acos(cos_theta_max) of +z.
-/// pdf = 1 / (2 pi (1 - cos_theta_max)).
-inline Vec3f square_to_uniform_cone(Vec2f u, float cos_theta_max) {
-  float cos_theta = 1.f - u.x * (1.f - cos_theta_max);
-  float sin_theta = std::sqrt(std::max(0.f, 1.f - cos_theta * cos_theta));
+/// Uniform direction inside the cone of directions whose angle to +z has
+/// 1 - cos(theta) <= one_minus_cos_max. pdf = 1 / (2 pi one_minus_cos_max).
+/// NOTE: parameterized by s = 1 - cos(theta) with sin(theta) = sqrt(s (2 - s)) (as in
+/// Mitsuba 3's warp::square_to_uniform_cone): computing sin from a float cos(theta) would
+/// collapse a tiny cone such as the sun's (1 - cos = 1.1e-5, 180 float steps) onto rings.
+inline Vec3f square_to_uniform_cone_omc(Vec2f u, float one_minus_cos_max) {
+  float s = u.x * one_minus_cos_max;
+  float sin_theta = std::sqrt(std::max(0.f, s * (2.f - s)));
   float phi = 2.f * k_pi * u.y;
-  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
+  return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), 1.f - s};
+}
+/// Uniform direction inside the cone within acos(cos_theta_max) of +z.
+/// pdf = 1 / (2 pi (1 - cos_theta_max)). (1 - cos_theta_max is exact in float.)
+inline Vec3f square_to_uniform_cone(Vec2f u, float cos_theta_max) {
+  return square_to_uniform_cone_omc(u, 1.f - cos_theta_max);
 }
 inline float uniform_cone_pdf(float cos_theta_max) {
   return 1.f / (2.f * k_pi * (1.f - cos_theta_max));
 }
-/// Solid angle of a cone with the given half-angle cosine, accurate for tiny cones.
+/// 1 - cos(half_angle), accurate for tiny angles.
 /// NOTE: 1 - cos(t) = 2 sin^2(t/2) avoids cancellation for the sun's 0.27 degree half-angle.
-inline float cone_solid_angle_from_half_angle(float half_angle) {
+inline float one_minus_cos(float half_angle) {
   float s = std::sin(0.5f * half_angle);
-  return 2.f * k_pi * 2.f * s * s;
+  return 2.f * s * s;
 }
+/// Solid angle of a cone with the given half-angle, accurate for tiny cones.
+inline float cone_solid_angle_from_half_angle(float half_angle) { return 2.f * k_pi * one_minus_cos(half_angle); }
 
 /// Uniform barycentric coordinates (b1, b2) on a triangle; b0 = 1 - b1 - b2.
 /// NOTE: square-root parameterization, Osada et al. 2002 / pbrt-v3 eq. 13.x;

@@ -173,63 +173,104 @@ bool Accel::occluded(const Ray& ray) const {
   return r.tfar < 0.f;
 }
 
-void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  alignas(64) RTCRayHit16 rh;
-  alignas(64) int valid[k_packet_size];
-  for (int i = 0; i < k_packet_size; ++i) {
-    valid[i] = rays.valid[i];
-    rh.ray.org_x[i] = rays.ox[i];
-    rh.ray.org_y[i] = rays.oy[i];
-    rh.ray.org_z[i] = rays.oz[i];
-    rh.ray.dir_x[i] = rays.dx[i];
-    rh.ray.dir_y[i] = rays.dy[i];
-    rh.ray.dir_z[i] = rays.dz[i];
-    rh.ray.tnear[i] = 0.f;
-    rh.ray.tfar[i] = rays.t_max[i];
-    rh.ray.time[i] = 0.f;
-    rh.ray.mask[i] = 0xffffffffu;
-    rh.ray.id[i] = 0;
-    rh.ray.flags[i] = 0;
-    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+namespace {
+
+// Fills an Embree SoA ray packet of width N from the lanes listed in `lanes`.
+template <int N, class R>
+void fill_rays(const RayPacket& rays, const int* lanes, int n, R& r, int* valid) {
+  for (int k = 0; k < N; ++k) {
+    int i = lanes[k < n ? k : 0];
+    valid[k] = k < n ? -1 : 0;
+    r.org_x[k] = rays.ox[i];
+    r.org_y[k] = rays.oy[i];
+    r.org_z[k] = rays.oz[i];
+    r.dir_x[k] = rays.dx[i];
+    r.dir_y[k] = rays.dy[i];
+    r.dir_z[k] = rays.dz[i];
+    r.tnear[k] = 0.f;
+    r.tfar[k] = rays.t_max[i];
+    r.time[k] = 0.f;
+    r.mask[k] = 0xffffffffu;
+    r.id[k] = 0;
+    r.flags[k] = 0;
   }
-  rtcIntersect16(valid, m_impl->top, &ctx, &rh);
-  for (int i = 0; i < k_packet_size; ++i) {
-    hits->found[i] = valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+}
+
+template <int N, class RH>
+void scatter_hits(const RH& rh, const int* lanes, int n, HitPacket* hits) {
+  for (int k = 0; k < n; ++k) {
+    int i = lanes[k];
+    hits->found[i] = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
     if (!hits->found[i]) continue;
     RayHit& h = hits->hit[i];
-    h.t = rh.ray.tfar[i];
-    h.u = rh.hit.u[i];
-    h.v = rh.hit.v[i];
-    h.prim = rh.hit.primID[i];
-    h.inst = rh.hit.instID[0][i];
+    h.t = rh.ray.tfar[k];
+    h.u = rh.hit.u[k];
+    h.v = rh.hit.v[k];
+    h.prim = rh.hit.primID[k];
+    h.inst = rh.hit.instID[0][k];
+  }
+}
+
+}  // namespace
+
+// NOTE: active lanes are compacted; when at most 8 remain, the 8-wide Embree kernel is
+// used (a 16-wide traversal costs the same for 5 rays as for 16).
+void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
+  int lanes[k_packet_size];
+  int n = 0;
+  for (int i = 0; i < k_packet_size; ++i) {
+    hits->found[i] = false;
+    if (rays.valid[i]) lanes[n++] = i;
+  }
+  if (n == 0) return;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  if (n <= 8) {
+    alignas(32) RTCRayHit8 rh;
+    alignas(32) int valid[8];
+    fill_rays<8>(rays, lanes, n, rh.ray, valid);
+    for (int k = 0; k < 8; ++k) {
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect8(valid, m_impl->top, &ctx, &rh);
+    scatter_hits<8>(rh, lanes, n, hits);
+  } else {
+    alignas(64) RTCRayHit16 rh;
+    alignas(64) int valid[16];
+    fill_rays<16>(rays, lanes, n, rh.ray, valid);
+    for (int k = 0; k < 16; ++k) {
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, m_impl->top, &ctx, &rh);
+    scatter_hits<16>(rh, lanes, n, hits);
   }
 }
 
 void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size]) const {
+  int lanes[k_packet_size];
+  int n = 0;
+  for (int i = 0; i < k_packet_size; ++i) {
+    occluded[i] = false;
+    if (rays.valid[i]) lanes[n++] = i;
+  }
+  if (n == 0) return;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  alignas(64) RTCRay16 r;
-  alignas(64) int valid[k_packet_size];
-  for (int i = 0; i < k_packet_size; ++i) {
-    valid[i] = rays.valid[i];
-    r.org_x[i] = rays.ox[i];
-    r.org_y[i] = rays.oy[i];
-    r.org_z[i] = rays.oz[i];
-    r.dir_x[i] = rays.dx[i];
-    r.dir_y[i] = rays.dy[i];
-    r.dir_z[i] = rays.dz[i];
-    r.tnear[i] = 0.f;
-    r.tfar[i] = rays.t_max[i];
-    r.time[i] = 0.f;
-    r.mask[i] = 0xffffffffu;
-    r.id[i] = 0;
-    r.flags[i] = 0;
+  if (n <= 8) {
+    alignas(32) RTCRay8 r;
+    alignas(32) int valid[8];
+    fill_rays<8>(rays, lanes, n, r, valid);
+    rtcOccluded8(valid, m_impl->top, &ctx, &r);
+    for (int k = 0; k < n; ++k) occluded[lanes[k]] = r.tfar[k] < 0.f;
+  } else {
+    alignas(64) RTCRay16 r;
+    alignas(64) int valid[16];
+    fill_rays<16>(rays, lanes, n, r, valid);
+    rtcOccluded16(valid, m_impl->top, &ctx, &r);
+    for (int k = 0; k < n; ++k) occluded[lanes[k]] = r.tfar[k] < 0.f;
   }
-  rtcOccluded16(valid, m_impl->top, &ctx, &r);
-  for (int i = 0; i < k_packet_size; ++i) occluded[i] = valid[i] && r.tfar[i] < 0.f;
 }
 
 }  // namespace sg

@@ -73,6 +73,16 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   return si;
 }
 
+/// Error bound of points sampled on an emissive triangle: the hit-point bound of
+/// make_interaction (object-space vertices o0..o2 through the instance transform) plus the
+/// barycentric interpolation of the world-space vertices w0..w2 (pbrt-v4 sec. 6.8.5).
+inline float emissive_triangle_error(const InstanceRecord& inst, const Vec3f& o0, const Vec3f& o1, const Vec3f& o2,
+                                     const Vec3f& w0, const Vec3f& w1, const Vec3f& w2) {
+  float obj = max_component(vmax(vabs(o0), vmax(vabs(o1), vabs(o2))));
+  float world = max_component(vmax(vabs(w0), vmax(vabs(w1), vabs(w2))));
+  return inst.error_scale * obj + inst.error_offset + gamma_n(7) * world;
+}
+
 /// Offsets a ray origin along the geometric normal beyond the error bound of `p`,
 /// to the side of direction `w`.
 /// NOTE: pbrt-v4 OffsetRayOrigin (sec. 6.8.6), with a safety factor of 4 covering

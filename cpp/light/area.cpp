@@ -63,10 +63,7 @@ bool AreaLight::sample(const LightSampleContext& ctx, const Vec2f& u_in, LightSa
   out->li = le;
   out->pdf = m_area_pdf[t.prim] * dist2 / std::fabs(cos_l);
   out->p_light = p;
-  // NOTE: barycentric interpolation error bound, pbrt-v4 sec. 6.8.5, taken as the maximum
-  // over axes like the hit-point bound in integrator/interaction.h.
-  constexpr float g6 = 6 * 0x1p-24f / (1 - 6 * 0x1p-24f);
-  out->p_light_error = Vec3f(max_component(t.max_abs) * (2.f * g6));
+  out->p_light_error = Vec3f(t.p_error);
   out->n_light = t.n;
   out->delta = false;
   out->infinite = false;

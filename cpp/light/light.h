@@ -63,7 +63,10 @@ struct EmissiveTriangle {
   Vec3f p0, p1, p2;
   Vec3f n;  ///< unit geometric normal, oriented like SurfaceInteraction::ng
   Vec2f uv0, uv1, uv2;
-  Vec3f max_abs;  ///< max |coordinate| of the vertices, for error bounds
+  /// Absolute floating-point error bound of points computed on this triangle: the bound of
+  /// make_interaction for its instance (from the *object-space* vertices) plus the
+  /// interpolation error in world space.
+  float p_error = 0.f;
   uint32_t prim;
   const Material* material;
 };

@@ -1,0 +1,276 @@
+// core/sampling.h: chi-square goodness-of-fit of every warp against its pdf, pdf
+// normalization, output domains, and the discrete Distribution1D.
+//
+// Expected cell counts always come from integrating the *pdf function* over each cell
+// (adaptive Simpson, tests/cpp/chi2.h), never from the warp itself. Significance: see
+// k_chi2_alpha in chi2.h (0.01 overall, Bonferroni-corrected over the suite).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "chi2.h"
+#include "core/error.h"
+#include "core/rng.h"
+#include "core/sampling.h"
+
+using namespace sg;
+using namespace sgtest;
+
+namespace {
+
+constexpr int k_samples = 1000000;
+
+DVec3 to_d(const Vec3f& v) { return {v.x, v.y, v.z}; }
+Vec3f to_f(const DVec3& v) { return Vec3f(float(v.x), float(v.y), float(v.z)); }
+
+/// Histogram of a spherical warp in (cos theta, phi) around +z; counts samples outside
+/// the expected domain in *bad.
+template <class Warp, class InDomain>
+std::vector<double> sphere_histogram(const Grid2D& g, Warp warp, InDomain in_domain, uint64_t seed, int* bad,
+                                     std::string* first_bad) {
+  DFrame frame(DVec3{0, 0, 1});
+  Pcg32 rng(seed);
+  std::vector<double> h(g.size(), 0.0);
+  *bad = 0;
+  for (int i = 0; i < k_samples; ++i) {
+    Vec2f u = rng.next_2d();
+    Vec3f v = warp(u);
+    bool ok = std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) &&
+              std::fabs(length(v) - 1.f) < 1e-5f && in_domain(v);
+    double z, phi;
+    sphere_coords(frame, to_d(v), &z, &phi);
+    long c = g.cell(z, phi);
+    if (!ok || c < 0) {
+      if ((*bad)++ == 0)
+        *first_bad = "u = (" + std::to_string(u.x) + ", " + std::to_string(u.y) + ") -> (" + std::to_string(v.x) +
+                     ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + ")";
+      continue;
+    }
+    h[size_t(c)] += 1.0;
+  }
+  return h;
+}
+
+}  // namespace
+
+// The chi-square machinery itself: known quantiles of the chi-square distribution and
+// exact integrals, so that a broken helper cannot make the warp tests vacuous.
+TEST(sampling, chi2_helper_reference_values) {
+  // Critical values from standard tables.
+  EXPECT_NEAR(chi2_sf(3.841459, 1), 0.05, 1e-6);
+  EXPECT_NEAR(chi2_sf(23.209251, 10), 0.01, 1e-6);
+  EXPECT_NEAR(chi2_sf(135.806723, 100), 0.01, 1e-6);
+  EXPECT_NEAR(chi2_cdf(2.0, 2), 1.0 - std::exp(-1.0), 1e-12);  // dof 2 is exponential
+  EXPECT_NEAR(chi2_sf(1118.95, 1000), 0.005, 2e-4);
+  // A test of a fair die with a loaded face must fail, a fair histogram must pass.
+  std::vector<double> expected(6, 1000.0), fair = {1010, 990, 1003, 980, 1025, 992},
+                                           loaded = {1200, 960, 960, 960, 960, 960};
+  EXPECT_TRUE(chi2_test(fair, expected, 0.01).ok);
+  EXPECT_FALSE(chi2_test(loaded, expected, 0.01).ok);
+  // Quadrature: smooth and discontinuous integrands.
+  EXPECT_NEAR(integrate_1d([](double x) { return std::sin(x); }, 0.0, k_pi_d, 1e-12), 2.0, 1e-9);
+  EXPECT_NEAR(integrate_2d([](double x, double y) { return x + y <= 1.0 ? 1.0 : 0.0; }, 0, 1, 0, 1, 1e-8), 0.5,
+              1e-5);
+}
+
+TEST(sampling, cosine_hemisphere_chi2) {
+  Grid2D g{32, 64, -1.0, 1.0, 0.0, 2.0 * k_pi_d};
+  int bad;
+  std::string first_bad;
+  auto obs = sphere_histogram(g, square_to_cosine_hemisphere, [](const Vec3f& v) { return v.z >= 0.f; }, 1, &bad,
+                              &first_bad);
+  EXPECT_EQ(bad, 0) << "samples outside the hemisphere, first: " << first_bad;
+  DFrame frame(DVec3{0, 0, 1});
+  auto exp = expected_counts(g, [&](double z, double phi) {
+    return double(cosine_hemisphere_pdf(to_f(sphere_dir(frame, z, phi))));
+  }, k_samples);
+  EXPECT_NEAR(sum(exp) / k_samples, 1.0, 1e-4) << "cosine_hemisphere_pdf does not integrate to 1";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+TEST(sampling, uniform_sphere_chi2) {
+  Grid2D g{32, 64, -1.0, 1.0, 0.0, 2.0 * k_pi_d};
+  int bad;
+  std::string first_bad;
+  auto obs = sphere_histogram(g, square_to_uniform_sphere, [](const Vec3f&) { return true; }, 2, &bad, &first_bad);
+  EXPECT_EQ(bad, 0) << "samples off the unit sphere, first: " << first_bad;
+  auto exp = expected_counts(g, [&](double, double) { return double(uniform_sphere_pdf()); }, k_samples);
+  EXPECT_NEAR(sum(exp) / k_samples, 1.0, 1e-5) << "uniform_sphere_pdf does not integrate to 1";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+// Cones from wider than a hemisphere down to the sun (0.53 degree diameter, half-angle
+// 0.265 degrees). Binned in the cone-local parameterization (theta / theta_max, phi) so
+// that cells cover the cone for every size. theta_max is the exact angle of the float
+// cos_theta_max the warp receives. For the sun, 1 - cos_theta_max is only ~180 float ulps
+// of 1, so the warp must produce continuously distributed directions within the cone
+// without deriving them from a float cos(theta) (which can take only ~180 values there).
+class SamplingCone : public ::testing::TestWithParam<double> {};
+
+TEST_P(SamplingCone, uniform_cone_chi2_and_domain) {
+  const double half_angle_deg = GetParam();
+  const float cos_max = float(std::cos(half_angle_deg * k_pi_d / 180.0));
+  // Exact half-angle of the float cosine: 1 - c = 2 sin^2(theta / 2).
+  const double theta_max = 2.0 * std::asin(std::sqrt(0.5 * (1.0 - double(cos_max))));
+  DFrame frame(DVec3{0, 0, 1});
+  Grid2D g{16, 32, 0.0, 1.0, 0.0, 2.0 * k_pi_d};
+  Pcg32 rng(3 + uint64_t(half_angle_deg * 1000));
+  std::vector<double> obs(g.size(), 0.0);
+  int bad = 0;
+  std::string first_bad;
+  for (int i = 0; i < k_samples; ++i) {
+    Vec2f u = rng.next_2d();
+    Vec3f v = square_to_uniform_cone(u, cos_max);
+    double tau, phi;
+    cone_coords(frame, theta_max, to_d(v), &tau, &phi);
+    bool ok = is_finite(v) && std::fabs(length(v) - 1.f) < 1e-5f && v.z >= cos_max;
+    // The float result may overshoot the cone by rounding; a relative 1e-4 of the angle
+    // (tau <= 1 + 1e-4) is accepted and clamped into the last ring.
+    if (ok && tau > 1.0 && tau <= 1.0 + 1e-4) tau = 1.0;
+    long c = g.cell(tau, phi);
+    if (!ok || c < 0) {
+      if (bad++ == 0)
+        first_bad = "u = (" + std::to_string(u.x) + ", " + std::to_string(u.y) + "), tau = " + std::to_string(tau);
+      continue;
+    }
+    obs[size_t(c)] += 1.0;
+  }
+  EXPECT_EQ(bad, 0) << "samples outside the cone, first: " << first_bad;
+  const double pdf = double(uniform_cone_pdf(cos_max));
+  auto exp = expected_counts(g, [&](double tau, double) { return pdf * cone_jacobian(theta_max, tau); }, k_samples);
+  EXPECT_NEAR(sum(exp) / k_samples, 1.0, 1e-4) << "uniform_cone_pdf does not integrate to 1 over the cone";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << "half-angle " << half_angle_deg << " deg: " << r.message;
+}
+
+INSTANTIATE_TEST_SUITE_P(sampling, SamplingCone, ::testing::Values(120.0, 90.0, 60.0, 25.0, 2.5, 0.265));
+
+TEST(sampling, cone_solid_angle_matches_double_precision) {
+  for (double deg : {0.01, 0.265, 1.0, 30.0, 89.0}) {
+    double a = deg * k_pi_d / 180.0;
+    double ref = 2.0 * k_pi_d * (1.0 - std::cos(a));
+    EXPECT_NEAR(cone_solid_angle_from_half_angle(float(a)) / ref, 1.0, 1e-5) << deg << " degrees";
+  }
+}
+
+// Barycentric domain (b1, b2) in the unit square; the documented pdf is 1 / area on the
+// triangle, i.e. 2 on {b1, b2 >= 0, b1 + b2 <= 1} and 0 elsewhere. The grid is 37 x 41 so
+// that the diagonal b1 + b2 = 1 cuts cells generically.
+TEST(sampling, uniform_triangle_chi2_and_domain) {
+  auto pdf = [](double b1, double b2) { return (b1 >= 0 && b2 >= 0 && b1 + b2 <= 1.0) ? 2.0 : 0.0; };
+  Grid2D g{37, 41, 0.0, 1.0, 0.0, 1.0};
+  Pcg32 rng(4);
+  std::vector<double> obs(g.size(), 0.0);
+  int bad = 0;
+  for (int i = 0; i < k_samples; ++i) {
+    Vec2f b = square_to_uniform_triangle(rng.next_2d());
+    bool ok = b.x >= 0.f && b.y >= 0.f && b.x + b.y <= 1.f + 1e-6f;
+    long c = g.cell(b.x, b.y);
+    if (!ok || c < 0) {
+      ++bad;
+      continue;
+    }
+    obs[size_t(c)] += 1.0;
+  }
+  EXPECT_EQ(bad, 0) << "barycentrics outside the triangle";
+  auto exp = expected_counts(g, pdf, k_samples, 1e-9, 22);
+  EXPECT_NEAR(sum(exp) / k_samples, 1.0, 1e-4);
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+TEST(sampling, disk_concentric_domain_and_uniformity) {
+  // The disk warp underlies the cosine hemisphere; check its domain and area uniformity
+  // in polar cells (r^2, phi), whose areas are equal.
+  Grid2D g{16, 32, 0.0, 1.0, 0.0, 2.0 * k_pi_d};
+  Pcg32 rng(5);
+  std::vector<double> obs(g.size(), 0.0);
+  int bad = 0;
+  for (int i = 0; i < k_samples; ++i) {
+    Vec2f d = square_to_uniform_disk_concentric(rng.next_2d());
+    double r2 = double(d.x) * d.x + double(d.y) * d.y;
+    long c = g.cell(std::min(r2, 1.0), wrap_phi(std::atan2(d.y, d.x)));
+    if (!(r2 <= 1.0 + 1e-6) || c < 0) {
+      ++bad;
+      continue;
+    }
+    obs[size_t(c)] += 1.0;
+  }
+  EXPECT_EQ(bad, 0);
+  // Density 1/pi on the disk; in (r^2, phi) coordinates dA = 0.5 d(r^2) d(phi).
+  auto exp = expected_counts(g, [](double, double) { return 0.5 / k_pi_d; }, k_samples);
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+TEST(sampling, distribution1d_chi2) {
+  // Irregular weights with zero entries (including first and last) and a dominant bin.
+  Pcg32 wrng(6);
+  std::vector<float> w(64);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = wrng.next_float() * wrng.next_float();
+  w[0] = 0.f;
+  w[5] = 0.f;
+  w[6] = 0.f;
+  w[40] = 30.f;
+  w[63] = 0.f;
+  Distribution1D dist(w);
+  ASSERT_EQ(dist.size(), w.size());
+  double total = 0.0;
+  for (float x : w) total += x;
+  EXPECT_NEAR(dist.total() / total, 1.0, 1e-6);
+  std::vector<double> expected(w.size());
+  for (size_t i = 0; i < w.size(); ++i) {
+    expected[i] = k_samples * double(w[i]) / total;
+    EXPECT_NEAR(dist.pmf(i), double(w[i]) / total, 1e-6 * double(w[i]) / total + 1e-12) << "bin " << i;
+  }
+  Pcg32 rng(7);
+  std::vector<double> obs(w.size(), 0.0);
+  // The remapped u must be uniform on [0, 1) again (it is reused for a further decision).
+  Grid2D gu{50, 1, 0.0, 1.0, 0.0, 1.0};
+  std::vector<double> obs_u(gu.size(), 0.0);
+  int bad = 0;
+  for (int i = 0; i < k_samples; ++i) {
+    float u = rng.next_float(), pmf = -1.f, ur = -1.f;
+    size_t k = dist.sample(u, &pmf, &ur);
+    if (k >= w.size() || pmf != dist.pmf(k) || !(ur >= 0.f && ur < 1.f)) {
+      ++bad;
+      continue;
+    }
+    obs[k] += 1.0;
+    if (k == 40) obs_u[size_t(gu.cell(ur, 0.5))] += 1.0;  // the dominant bin has ~40% of samples
+  }
+  EXPECT_EQ(bad, 0) << "invalid index, pmf or remapped u";
+  Chi2Result r = chi2_test(obs, expected);
+  EXPECT_TRUE(r.ok) << r.message;
+  auto exp_u = expected_counts(gu, [&](double, double) { return sum(obs_u); }, 1.0);
+  Chi2Result ru = chi2_test(obs_u, exp_u);
+  EXPECT_TRUE(ru.ok) << "remapped u: " << ru.message;
+}
+
+TEST(sampling, distribution1d_edges) {
+  Distribution1D d({0.f, 0.f, 2.f, 0.f, 1.f, 0.f});
+  EXPECT_EQ(d.sample(0.f), 2u);
+  EXPECT_EQ(d.sample(k_one_minus_epsilon), 4u);
+  float pmf;
+  EXPECT_EQ(d.sample(0.5f, &pmf), 2u);
+  EXPECT_FLOAT_EQ(pmf, 2.f / 3.f);
+  EXPECT_EQ(d.sample(0.7f, &pmf), 4u);
+  EXPECT_FLOAT_EQ(pmf, 1.f / 3.f);
+  // All-zero weights fall back to uniform selection.
+  Distribution1D z({0.f, 0.f, 0.f, 0.f});
+  for (size_t i = 0; i < 4; ++i) EXPECT_FLOAT_EQ(z.pmf(i), 0.25f);
+  EXPECT_EQ(z.sample(0.6f), 2u);
+  EXPECT_THROW(Distribution1D({1.f, -1.f}), Error);
+  EXPECT_THROW(Distribution1D({1.f, std::nanf("")}), Error);
+}
+
+TEST(sampling, power_heuristic) {
+  EXPECT_FLOAT_EQ(power_heuristic(1.f, 1.f), 0.5f);
+  EXPECT_FLOAT_EQ(power_heuristic(3.f, 1.f), 0.9f);
+  EXPECT_FLOAT_EQ(power_heuristic(3.f, 1.f) + power_heuristic(1.f, 3.f), 1.f);
+  EXPECT_EQ(power_heuristic(0.f, 1.f), 0.f);
+  EXPECT_EQ(power_heuristic(k_inf, 1.f), 1.f);
+}
