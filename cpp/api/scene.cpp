@@ -10,7 +10,8 @@ namespace sg {
 Scene::Scene() : m_accel(new Accel) {
   ParamSet p;
   p.set("albedo", 0.5);
-  m_default_material = create_material("diffuse", p, [](uint32_t) { return nullptr; }, "default material");
+  MaterialContext none{[](uint32_t) { return nullptr; }, [](uint32_t) { return nullptr; }};
+  m_default_material = create_material("diffuse", p, none, "default material");
 }
 
 Scene::~Scene() = default;
@@ -78,12 +79,20 @@ uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
   return id;
 }
 
-uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
-  uint32_t id = uint32_t(m_materials.size());
-  auto lookup = [this](uint32_t tid) -> std::shared_ptr<Texture> {
+MaterialContext Scene::material_context() const {
+  MaterialContext ctx;
+  ctx.textures = [this](uint32_t tid) -> std::shared_ptr<Texture> {
     return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
   };
-  auto m = create_material(type, params, lookup, "material " + std::to_string(id));
+  ctx.materials = [this](uint32_t mid) -> std::shared_ptr<Material> {
+    return mid < m_materials.size() && m_materials[mid] ? m_materials[mid]->object : nullptr;
+  };
+  return ctx;
+}
+
+uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
+  uint32_t id = uint32_t(m_materials.size());
+  auto m = create_material(type, params, material_context(), "material " + std::to_string(id));
   m_materials.emplace_back(MaterialEntry{type, params, m});
   m_structure_dirty = true;
   return id;
@@ -91,10 +100,7 @@ uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
 
 void Scene::update_material(uint32_t id, const std::string& type, const ParamSet& params) {
   MaterialEntry& e = get_slot(m_materials, id, "material");
-  auto lookup = [this](uint32_t tid) -> std::shared_ptr<Texture> {
-    return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
-  };
-  e.object = create_material(type, params, lookup, "material " + std::to_string(id));
+  e.object = create_material(type, params, material_context(), "material " + std::to_string(id));
   e.type = type;
   e.params = params;
   m_structure_dirty = true;

@@ -140,6 +140,7 @@ class Scene {
   template <class T>
   static const T& get_slot(const std::vector<std::optional<T>>& v, uint32_t id, const char* what);
   void check_material_id(int64_t id, const char* context) const;
+  MaterialContext material_context() const;
   void build_render_scene();
 
   std::vector<std::optional<MeshEntry>> m_meshes;

@@ -66,8 +66,27 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   } else {
     si.ns = si.ng;
   }
-  if (!m.uvs.empty()) si.uv = m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
-  else si.uv = Vec2f(b1, b2);
+  Vec3f dpdu_o(0.f);
+  bool has_dpdu = false;
+  if (!m.uvs.empty()) {
+    si.uv = m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
+    // NOTE: dp/du from the triangle's uv parameterization (pbrt-v4 sec. 6.5.3):
+    // [dp02 dp12] = [duv02 duv12] [dpdu dpdv]^T, solved by Cramer's rule.
+    Vec2f duv02 = m.uvs[i0] - m.uvs[i2], duv12 = m.uvs[i1] - m.uvs[i2];
+    float det = duv02.x * duv12.y - duv02.y * duv12.x;
+    if (std::fabs(det) > 1e-12f) {
+      Vec3f dp02 = p0 - p2, dp12 = p1 - p2;
+      dpdu_o = (dp02 * duv12.y - dp12 * duv02.y) / det;
+      has_dpdu = is_finite(dpdu_o) && length_squared(dpdu_o) > 0.f;
+    }
+  } else {
+    si.uv = Vec2f(b1, b2);
+  }
+  // Unit tangent orthogonal to the shading normal (Gram-Schmidt); any tangent if none.
+  Vec3f t = has_dpdu ? T.apply_vector(dpdu_o) : Vec3f(0.f);
+  t = t - si.ns * dot(si.ns, t);
+  float tl = length(t);
+  si.dpdu = (tl > 1e-12f && std::isfinite(tl)) ? t / tl : Frame(si.ns).s;
   si.inst = hit.inst;
   si.prim = hit.prim;
   return si;

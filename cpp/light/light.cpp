@@ -4,17 +4,41 @@
 
 namespace sg {
 
+namespace {
+
+struct LightFactory {
+  const char* key;
+  std::shared_ptr<Light> (*create)(const ParamSet&);
+};
+
+// The light plugins. One line per plugin (file light/<key>.cpp), alphabetical.
+// Area lights are not plugins: the scene makes them from emissive materials.
+const LightFactory k_factories[] = {
+    {"environment", create_environment_light},
+    {"point", create_point_light},
+    {"sun", create_sun_light},
+};
+
+}  // namespace
+
+std::vector<std::string> light_types() {
+  std::vector<std::string> keys;
+  for (const auto& f : k_factories) keys.push_back(f.key);
+  return keys;
+}
+
 std::shared_ptr<Light> create_light(const std::string& type, const ParamSet& params, const std::string& context) {
-  static const std::vector<std::string> k_types = {"point", "sun", "environment"};
   std::shared_ptr<Light> l;
   try {
-    if (type == "point") l = create_point_light(params);
-    else if (type == "sun") l = create_sun_light(params);
-    else if (type == "environment") l = create_environment_light(params);
-    else {
-      std::string guess = closest_match(type, k_types);
+    for (const auto& f : k_factories)
+      if (type == f.key) l = f.create(params);
+    if (!l) {
+      std::vector<std::string> keys = light_types();
+      std::string guess = closest_match(type, keys);
+      std::string list;
+      for (size_t i = 0; i < keys.size(); ++i) list += (i ? ", " : "") + keys[i];
       throw Error("unknown light type '" + type + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-                  "; known types: point, sun, environment (area lights come from emissive materials)");
+                  "; known types: " + list + " (area lights come from emissive materials)");
     }
     params.check_unused("light '" + type + "'");
   } catch (const Error& e) {

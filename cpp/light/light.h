@@ -57,6 +57,8 @@ class Light {
 
 /// Creates "point", "sun" or "environment" from parameters. Throws sg::Error naming `context`.
 std::shared_ptr<Light> create_light(const std::string& type, const ParamSet& params, const std::string& context);
+/// Registry keys of all light plugins.
+std::vector<std::string> light_types();
 
 /// One emitting triangle in world space (built by the scene at commit).
 struct EmissiveTriangle {

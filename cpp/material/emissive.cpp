@@ -15,15 +15,15 @@ class EmissiveMaterial final : public Material {
     m_reflects = !is_black(m_albedo->average());
   }
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
-    return m_reflects ? lambert::eval(si, wo, wi, m_albedo->eval(si.uv)) : Color(0.f);
+    return m_reflects ? lambert::eval(si, wo, wi, m_albedo->eval(si.uv, si.uv_footprint)) : Color(0.f);
   }
   float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     return m_reflects ? lambert::pdf(si, wo, wi) : 0.f;
   }
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
-    return m_reflects && lambert::sample(si, wo, u, m_albedo->eval(si.uv), out);
+    return m_reflects && lambert::sample(si, wo, u, m_albedo->eval(si.uv, si.uv_footprint), out);
   }
-  Color albedo(const SurfaceInteraction& si) const override { return m_albedo->eval(si.uv); }
+  Color albedo(const SurfaceInteraction& si) const override { return m_albedo->eval(si.uv, si.uv_footprint); }
   uint32_t flags() const override { return m_reflects ? (k_bsdf_diffuse | k_bsdf_reflection) : k_bsdf_none; }
 
   Color emission(const SurfaceInteraction& si, const Vec3f& wo) const override {
@@ -41,11 +41,11 @@ class EmissiveMaterial final : public Material {
   bool m_reflects;
 };
 
-std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const TextureLookup& textures) {
+std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const MaterialContext& ctx) {
   Color radiance = params.get_color("radiance", Color(1.f)) * params.get_float("strength", 1.f);
   if (radiance.x < 0.f || radiance.y < 0.f || radiance.z < 0.f)
     throw Error("parameter 'radiance': components must be non-negative");
-  auto albedo = get_color_texture(params, "albedo", Color(0.f), textures);
+  auto albedo = get_color_texture(params, "albedo", Color(0.f), ctx.textures);
   bool two_sided = params.get_bool("two_sided", false);
   return std::make_shared<EmissiveMaterial>(radiance, albedo, two_sided);
 }

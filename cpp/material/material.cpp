@@ -16,17 +16,40 @@ std::shared_ptr<Texture> get_color_texture(const ParamSet& params, const std::st
   return make_constant_texture(params.get_color(name, def));
 }
 
+namespace {
+
+struct MaterialFactory {
+  const char* key;
+  std::shared_ptr<Material> (*create)(const ParamSet&, const MaterialContext&);
+};
+
+// The material plugins. One line per plugin (file material/<key>.cpp), alphabetical.
+const MaterialFactory k_factories[] = {
+    {"diffuse", create_diffuse_material},
+    {"emissive", create_emissive_material},
+};
+
+}  // namespace
+
+std::vector<std::string> material_types() {
+  std::vector<std::string> keys;
+  for (const auto& f : k_factories) keys.push_back(f.key);
+  return keys;
+}
+
 std::shared_ptr<Material> create_material(const std::string& type, const ParamSet& params,
-                                          const TextureLookup& textures, const std::string& context) {
-  static const std::vector<std::string> k_types = {"diffuse", "emissive"};
+                                          const MaterialContext& ctx, const std::string& context) {
   std::shared_ptr<Material> m;
   try {
-    if (type == "diffuse") m = create_diffuse_material(params, textures);
-    else if (type == "emissive") m = create_emissive_material(params, textures);
-    else {
-      std::string guess = closest_match(type, k_types);
+    for (const auto& f : k_factories)
+      if (type == f.key) m = f.create(params, ctx);
+    if (!m) {
+      std::vector<std::string> keys = material_types();
+      std::string guess = closest_match(type, keys);
+      std::string list;
+      for (size_t i = 0; i < keys.size(); ++i) list += (i ? ", " : "") + keys[i];
       throw Error("unknown material type '" + type + "'" + (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-                  "; known types: diffuse, emissive");
+                  "; known types: " + list);
     }
     params.check_unused("material '" + type + "'");
   } catch (const Error& e) {

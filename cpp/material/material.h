@@ -11,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/math.h"
 #include "core/params.h"
@@ -25,7 +26,22 @@ struct SurfaceInteraction {
   Vec3f ng;       ///< unit geometric normal (follows the mesh winding / handedness)
   Vec3f ns;       ///< unit shading normal, in the same hemisphere as `ng`
   Vec2f uv;       ///< texture coordinates
+  /// Unit tangent along increasing u (world space), orthogonal to `ns`; an arbitrary
+  /// tangent when the mesh has no uvs. Anisotropic BSDFs and normal maps use it.
+  Vec3f dpdu;
+  /// Width of the ray footprint in texture space (for filtered texture lookups); 0 means
+  /// a point sample.
+  float uv_footprint = 0.f;
   uint32_t inst = 0, prim = 0;
+
+  /// Local shading frame: s = dpdu, t = ns x dpdu, n = ns.
+  Frame shading_frame() const {
+    Frame f;
+    f.n = ns;
+    f.s = dpdu;
+    f.t = cross(ns, dpdu);
+    return f;
+  }
 };
 
 enum BsdfFlags : uint32_t {
@@ -42,6 +58,7 @@ struct BsdfSample {
   Color weight;  ///< f * |cos| / pdf
   float pdf = 0.f;
   uint32_t flags = 0;
+  float eta = 1.f;  ///< relative index of refraction of a transmission event (1 otherwise)
 };
 
 class Material {
@@ -68,11 +85,21 @@ class Material {
 };
 
 using TextureLookup = std::function<std::shared_ptr<Texture>(uint32_t id)>;
+using MaterialLookup = std::function<std::shared_ptr<Material>(uint32_t id)>;
 
-/// Creates a material plugin by registry key ("diffuse", "emissive").
+/// What a material plugin may look up while it is created: textures and (for materials
+/// made of other materials, such as "mix") materials, by id.
+struct MaterialContext {
+  TextureLookup textures;
+  MaterialLookup materials;
+};
+
+/// Creates a material plugin by registry key (see material/material.cpp for the list).
 /// Throws sg::Error naming `context` for unknown types, unknown or ill-typed parameters.
 std::shared_ptr<Material> create_material(const std::string& type, const ParamSet& params,
-                                          const TextureLookup& textures, const std::string& context);
+                                          const MaterialContext& ctx, const std::string& context);
+/// Registry keys of all material plugins.
+std::vector<std::string> material_types();
 
 /// A colour parameter given either as a constant (scalar / RGB) or a TextureRef.
 std::shared_ptr<Texture> get_color_texture(const ParamSet& params, const std::string& name, const Color& def,

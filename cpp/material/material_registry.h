@@ -1,9 +1,11 @@
-// Internal: factory functions of the material plugins (one file each).
+// Internal: factory functions of the material plugins (one file each), listed in the
+// table of material.cpp.
 #pragma once
 #include "core/error.h"
 #include "material/material.h"
 
 namespace sg {
-std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const TextureLookup& textures);
-std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const TextureLookup& textures);
+std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const MaterialContext& ctx);
+std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const MaterialContext& ctx);
+// New plugins: declare `create_<key>_material` here (one line, alphabetical order).
 }  // namespace sg

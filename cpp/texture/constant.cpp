@@ -8,7 +8,7 @@ namespace sg {
 class ConstantTexture final : public Texture {
  public:
   explicit ConstantTexture(const Color& v) : m_value(v) {}
-  Color eval(const Vec2f&) const override { return m_value; }
+  Color eval(const Vec2f&, float) const override { return m_value; }
   Color average() const override { return m_value; }
 
  private:

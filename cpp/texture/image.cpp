@@ -21,7 +21,7 @@ class ImageTexture final : public Texture {
     m_average = Color(float(acc[0] / n), float(acc[1] / n), float(acc[2] / n)) * m_scale;
   }
 
-  Color eval(const Vec2f& uv) const override {
+  Color eval(const Vec2f& uv, float /*footprint*/) const override {
     // NOTE: texture space has v pointing up (glTF/OBJ convention); image rows go down.
     float x = uv.x * m_img.width - 0.5f;
     float y = (1.f - uv.y) * m_img.height - 0.5f;

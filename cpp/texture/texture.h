@@ -13,8 +13,9 @@ namespace sg {
 class Texture {
  public:
   virtual ~Texture() = default;
-  /// Linear RGB value at texture coordinate `uv`.
-  virtual Color eval(const Vec2f& uv) const = 0;
+  /// Linear RGB value at texture coordinate `uv`, filtered over a footprint of width
+  /// `footprint` in texture space (0 = point sample).
+  virtual Color eval(const Vec2f& uv, float footprint = 0.f) const = 0;
   /// Average value over the texture (used for light power estimates and albedo priors).
   virtual Color average() const = 0;
 };

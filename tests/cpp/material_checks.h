@@ -41,11 +41,16 @@ inline sg::SurfaceInteraction make_si(const DVec3& ng, const DVec3& ns) {
   si.ng = to_f(dnormalize(ng));
   si.ns = to_f(dnormalize(ns));
   si.uv = sg::Vec2f(0.25f, 0.75f);
+  si.dpdu = sg::Frame(si.ns).s;
   return si;
 }
 
-inline sg::TextureLookup no_textures() {
-  return [](uint32_t) -> std::shared_ptr<sg::Texture> { return nullptr; };
+/// A plugin context without textures or materials to refer to.
+inline sg::MaterialContext no_textures() {
+  sg::MaterialContext ctx;
+  ctx.textures = [](uint32_t) -> std::shared_ptr<sg::Texture> { return nullptr; };
+  ctx.materials = [](uint32_t) -> std::shared_ptr<sg::Material> { return nullptr; };
+  return ctx;
 }
 
 inline double rel_diff(double a, double b) {

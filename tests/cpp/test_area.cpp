@@ -31,7 +31,7 @@ std::shared_ptr<Material> emissive(const Color& radiance, bool two_sided) {
   ParamSet p;
   p.set("radiance", std::vector<double>{radiance.x, radiance.y, radiance.z});
   p.set("two_sided", two_sided);
-  return create_material("emissive", p, [](uint32_t) { return nullptr; }, "test");
+  return create_material("emissive", p, sg::MaterialContext{[](uint32_t) { return std::shared_ptr<sg::Texture>(); }, [](uint32_t) { return std::shared_ptr<sg::Material>(); }}, "test");
 }
 
 /// Emissive triangle with the winding normal, like Scene::build_render_scene makes it.

@@ -260,7 +260,7 @@ void run_scale(double scale, uint64_t seed, Stats* st) {
   ParamSet lamp;
   lamp.set("radiance", 1.0);
   lamp.set("two_sided", true);
-  auto emissive = create_material("emissive", lamp, [](uint32_t) { return nullptr; }, "lamp");
+  auto emissive = create_material("emissive", lamp, sg::MaterialContext{[](uint32_t) { return std::shared_ptr<sg::Texture>(); }, [](uint32_t) { return std::shared_ptr<sg::Material>(); }}, "lamp");
   for (const TestTriangle& t : sc->tris) {
     D3 v0 = sc->world_vertex(t, 0), v1 = sc->world_vertex(t, 1), v2 = sc->world_vertex(t, 2);
     D3 n = norm3(cross3(v1 - v0, v2 - v0));
