@@ -98,7 +98,8 @@ class PathTracer {
     uint32_t base = 2 + st.bounce * k_dims_per_vertex;
 
     // Next-event estimation: sample a light, defer the shadow ray.
-    if ((flags & ~uint32_t(k_bsdf_delta)) && !sc.lights.empty()) {
+    // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
+    if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
       float pick_pmf;
       size_t li = sc.light_pick.sample(sampler.get(base), &pick_pmf);
       const Light* light = sc.lights[li];
