@@ -74,17 +74,18 @@ const TriangleMesh& Scene::mesh(uint32_t id) const { return *get_slot(m_meshes, 
 
 uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
   uint32_t id = uint32_t(m_textures.size());
-  auto t = create_texture(type, params, "texture " + std::to_string(id));
+  auto t = create_texture(type, params, "texture " + std::to_string(id), &m_images);
   m_textures.emplace_back(TextureEntry{type, params, t});
   return id;
 }
 
-MaterialContext Scene::material_context() const {
+MaterialContext Scene::material_context(std::vector<uint32_t>* depends_on) const {
   MaterialContext ctx;
   ctx.textures = [this](uint32_t tid) -> std::shared_ptr<Texture> {
     return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
   };
-  ctx.materials = [this](uint32_t mid) -> std::shared_ptr<Material> {
+  ctx.materials = [this, depends_on](uint32_t mid) -> std::shared_ptr<Material> {
+    if (depends_on) depends_on->push_back(mid);
     return mid < m_materials.size() && m_materials[mid] ? m_materials[mid]->object : nullptr;
   };
   return ctx;
@@ -92,17 +93,41 @@ MaterialContext Scene::material_context() const {
 
 uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
   uint32_t id = uint32_t(m_materials.size());
-  auto m = create_material(type, params, material_context(), "material " + std::to_string(id));
-  m_materials.emplace_back(MaterialEntry{type, params, m});
+  std::vector<uint32_t> deps;
+  auto m = create_material(type, params, material_context(&deps), "material " + std::to_string(id));
+  m_materials.emplace_back(MaterialEntry{type, params, m, deps});
   m_structure_dirty = true;
   return id;
 }
 
 void Scene::update_material(uint32_t id, const std::string& type, const ParamSet& params) {
   MaterialEntry& e = get_slot(m_materials, id, "material");
-  e.object = create_material(type, params, material_context(), "material " + std::to_string(id));
+  std::vector<uint32_t> deps;
+  auto object = create_material(type, params, material_context(&deps), "material " + std::to_string(id));
+  // NOTE: materials may only refer to materials created before them, so that a saved
+  // scene can be replayed in id order and updates propagate in one forward pass.
+  for (uint32_t d : deps)
+    if (d >= id)
+      throw Error("material " + std::to_string(id) + ": refers to material " + std::to_string(d) +
+                  "; a material may only refer to materials with smaller ids (created before it)");
+  e.object = object;
   e.type = type;
   e.params = params;
+  e.depends_on = deps;
+  // Re-create the materials built from it (e.g. a "mix" of it), transitively, in id order.
+  std::vector<bool> changed(m_materials.size(), false);
+  changed[id] = true;
+  for (size_t j = size_t(id) + 1; j < m_materials.size(); ++j) {
+    if (!m_materials[j]) continue;
+    MaterialEntry& dep = *m_materials[j];
+    bool stale = false;
+    for (uint32_t d : dep.depends_on) stale = stale || (d < changed.size() && changed[d]);
+    if (!stale) continue;
+    std::vector<uint32_t> dd;
+    dep.object = create_material(dep.type, dep.params, material_context(&dd), "material " + std::to_string(j));
+    dep.depends_on = dd;
+    changed[j] = true;
+  }
   m_structure_dirty = true;
 }
 

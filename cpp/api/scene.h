@@ -25,6 +25,7 @@
 #include "integrator/render_scene.h"
 #include "light/light.h"
 #include "material/material.h"
+#include "texture/image_cache.h"
 #include "texture/texture.h"
 
 namespace sg {
@@ -95,6 +96,11 @@ class Scene {
   void commit();
   bool has_pending_edits() const;
   const CommitStats& commit_stats() const { return m_stats; }
+  /// The committed view that the integrator renders (after commit()): lights and their
+  /// selection distribution, instance records. For tests and tools.
+  const RenderScene& render_scene() const { return m_render_scene; }
+  /// The scene's texture cache: each image file is decoded once per (path, colour space).
+  const ImageCache& image_cache() const { return m_images; }
   /// Renders with the current camera (committing pending edits first). Thread-safe
   /// with respect to the GIL: touches no Python objects.
   void render(const RenderSettings& settings, Film* film);
@@ -110,7 +116,12 @@ class Scene {
     std::shared_ptr<Texture> object;
     std::shared_ptr<ImageData> pixels;  ///< for "embedded_image" textures (from GLB files)
   };
-  struct MaterialEntry { std::string type; ParamSet params; std::shared_ptr<Material> object; };
+  struct MaterialEntry {
+    std::string type;
+    ParamSet params;
+    std::shared_ptr<Material> object;
+    std::vector<uint32_t> depends_on;  ///< materials looked up while creating it (e.g. by "mix")
+  };
   struct LightEntry { std::string type; ParamSet params; std::shared_ptr<Light> object; };
   struct MeshEntry {
     std::shared_ptr<TriangleMesh> mesh;
@@ -140,7 +151,7 @@ class Scene {
   template <class T>
   static const T& get_slot(const std::vector<std::optional<T>>& v, uint32_t id, const char* what);
   void check_material_id(int64_t id, const char* context) const;
-  MaterialContext material_context() const;
+  MaterialContext material_context(std::vector<uint32_t>* depends_on = nullptr) const;
   void build_render_scene();
 
   std::vector<std::optional<MeshEntry>> m_meshes;
@@ -149,7 +160,8 @@ class Scene {
   std::vector<std::optional<InstanceEntry>> m_instances;
   std::vector<std::optional<LightEntry>> m_lights;
   std::vector<uint32_t> m_removed_instances;
-  std::map<std::string, uint32_t> m_image_cache;  // (path, scale) -> texture id
+  std::map<std::string, uint32_t> m_image_cache;  // imports: (resolved path, scale) -> texture id
+  ImageCache m_images;  // decoded pixels and mip maps shared by all image textures
   PinholeCamera m_camera;
   bool m_camera_set = false;
   bool m_structure_dirty = true;  // materials / lights / labels changed

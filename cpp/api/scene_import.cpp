@@ -28,7 +28,10 @@ ImportResult Scene::load_mesh_file(const std::string& path) {
     if (!im.texture_path.empty() || im.has_embedded_texture) {
       uint32_t tid;
       std::ostringstream key;
-      key << im.texture_path << "|" << im.base_color.x << "," << im.base_color.y << "," << im.base_color.z;
+      // One texture per (image, base colour factor); the pixels themselves are shared by
+      // every texture naming the file through the scene's ImageCache (add_texture).
+      if (!im.texture_path.empty()) key << ImageCache::resolve(im.texture_path);
+      key << "|" << im.base_color.x << "," << im.base_color.y << "," << im.base_color.z;
       if (!im.texture_path.empty() && m_image_cache.count(key.str())) {
         tid = m_image_cache[key.str()];
       } else if (!im.texture_path.empty()) {

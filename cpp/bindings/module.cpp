@@ -326,11 +326,13 @@ a BVH build). render() commits pending edits first.)doc")
         d["mesh_bvh_builds_last"] = s.commit_stats().mesh_bvh_builds_last;
         d["top_level_builds"] = s.commit_stats().top_level_builds;
         d["commits"] = s.commit_stats().commits;
+        d["image_loads"] = s.image_cache().loads();            // image files decoded
+        d["image_cache_hits"] = s.image_cache().hits();        // image textures that shared one
         return d;
       })
       .def("render",
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
-              uint32_t tile_size) {
+              uint32_t tile_size, bool texture_filtering) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -338,6 +340,7 @@ a BVH build). render() commits pending edits first.)doc")
              rs.seed = seed;
              rs.threads = threads;
              rs.tile_size = tile_size;
+             rs.texture_filtering = texture_filtering;
              auto film = std::make_shared<Film>();
              {
                py::gil_scoped_release release;
@@ -346,7 +349,7 @@ a BVH build). render() commits pending edits first.)doc")
              return film;
            },
            py::arg("spp") = 16, py::arg("max_depth") = 8, py::arg("rr_depth") = 5, py::arg("seed") = 0,
-           py::arg("threads") = 0, py::arg("tile_size") = 16,
+           py::arg("threads") = 0, py::arg("tile_size") = 16, py::arg("texture_filtering") = true,
            "Path-traces the scene; releases the GIL. Returns a RenderResult.")
       .def("save", &Scene::save, py::arg("path"), "Writes the scene (XML + '.bin' sidecar) for replay.")
       .def_static("load", &Scene::load, py::arg("path"), "Replays a scene written by save().");

@@ -18,6 +18,11 @@ class FileError : public Error {
   FileError(const std::string& path, const std::string& reason)
       : Error(path + ": " + reason), m_path(path) {}
   const std::string& path() const { return m_path; }
+  /// The same error with `context` ("material 3") in front of the message.
+  FileError with_context(const std::string& context) const { return FileError(m_path, context + ": " + what(), 0); }
+
+ private:
+  FileError(const std::string& path, const std::string& message, int) : Error(message), m_path(path) {}
 
  private:
   std::string m_path;

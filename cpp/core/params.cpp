@@ -96,6 +96,24 @@ Vec3f ParamSet::get_vec3(const std::string& name, const Vec3f& def) const {
   return r;
 }
 
+Vec2f ParamSet::get_vec2(const std::string& name, const Vec2f& def) const {
+  const Value* v = lookup(name);
+  if (!v) return def;
+  Vec2f r;
+  if (auto p = std::get_if<std::vector<double>>(v)) {
+    if (p->size() != 2) type_error(name, "a list of 2 numbers");
+    r = Vec2f(float((*p)[0]), float((*p)[1]));
+  } else if (auto d = std::get_if<double>(v)) {
+    r = Vec2f(float(*d), float(*d));
+  } else if (auto i = std::get_if<int64_t>(v)) {
+    r = Vec2f(float(*i), float(*i));
+  } else {
+    type_error(name, "a number or a list of 2 numbers");
+  }
+  if (!std::isfinite(r.x) || !std::isfinite(r.y)) throw Error("parameter '" + name + "': value is not finite");
+  return r;
+}
+
 Color ParamSet::get_color(const std::string& name, const Color& def) const { return get_vec3(name, def); }
 
 bool ParamSet::get_texture(const std::string& name, TextureRef* out) const {

@@ -36,6 +36,8 @@ class ParamSet {
   /// Accepts a scalar (grey) or a list of three numbers.
   Color get_color(const std::string& name, const Color& def) const;
   Vec3f get_vec3(const std::string& name, const Vec3f& def) const;
+  /// Accepts a scalar (both components) or a list of two numbers.
+  Vec2f get_vec2(const std::string& name, const Vec2f& def) const;
   /// Returns true and sets `out` when the parameter is a texture reference.
   bool get_texture(const std::string& name, TextureRef* out) const;
 

@@ -110,4 +110,45 @@ class Distribution1D {
   double m_total = 0.0;
 };
 
+/// Piecewise-constant 2D distribution on [0, 1)^2 over a grid of nu x nv cells with
+/// non-negative weights (row-major, row 0 = y in [0, 1/nv)).
+/// NOTE: marginal distribution over rows and one conditional distribution per row,
+/// pbrt-v3 sec. 13.6.7 ("Piecewise-Constant 2D Distributions"), built on the discrete
+/// Distribution1D whose remapped sample places the point uniformly inside the cell.
+/// Densities are with respect to area on the unit square. All-zero weights (or an all-zero
+/// row) fall back to uniform, like Distribution1D.
+class Distribution2D {
+ public:
+  Distribution2D() = default;
+  Distribution2D(const std::vector<float>& weights, size_t nu, size_t nv);
+
+  bool empty() const { return m_conditional.empty(); }
+  size_t width() const { return m_nu; }
+  size_t height() const { return m_nv; }
+  /// Sum of all weights.
+  double total() const { return m_total; }
+
+  /// Point in [0, 1)^2 distributed proportionally to the weight of its cell; `pdf` gets the
+  /// density, which equals pdf() at the returned point (the point is kept inside the cell
+  /// that was sampled, whatever the float rounding).
+  Vec2f sample(const Vec2f& u, float* pdf = nullptr) const;
+  /// Density at p (coordinates are clamped to the grid).
+  float pdf(const Vec2f& p) const;
+  /// Density inside cell (ix, iy).
+  float pdf_cell(size_t ix, size_t iy) const {
+    return m_marginal.pmf(iy) * m_conditional[iy].pmf(ix) * float(m_nu * m_nv);
+  }
+  /// Cell containing the coordinate x in [0, 1) along an axis with n cells (clamped).
+  static size_t cell_index(float x, size_t n) {
+    float s = x * float(n);
+    return s > 0.f ? std::min(size_t(s), n - 1) : 0;
+  }
+
+ private:
+  size_t m_nu = 0, m_nv = 0;
+  double m_total = 0.0;
+  std::vector<Distribution1D> m_conditional;  // one per row
+  Distribution1D m_marginal;                  // over rows
+};
+
 }  // namespace sg

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "integrator/interaction.h"
+#include "integrator/ray_cone.h"
 
 namespace sg {
 
@@ -44,17 +45,20 @@ struct PathState {
   bool prev_delta = true;  ///< the camera "sampled" the first direction
   bool active = true;
   bool hit_geometry = false;
+  float cone_width = 0.f, cone_spread = 0.f;  ///< ray cone for texture filtering (ray_cone.h)
 };
 
 class PathTracer {
  public:
-  PathTracer(const RenderScene& scene, const RenderSettings& settings) : m_scene(scene), m_s(settings) {}
+  PathTracer(const RenderScene& scene, const RenderSettings& settings)
+      : m_scene(scene), m_s(settings), m_pixel_spread(settings.texture_filtering ? pixel_spread_angle(scene.camera) : 0.f) {}
 
   /// The current ray escaped: infinite lights, MIS-weighted against light sampling.
   void on_miss(PathState& st) const {
     const RenderScene& sc = m_scene;
     for (uint32_t li : sc.infinite_lights) {
       const Light* light = sc.lights[li];
+      if (st.bounce == 0 && !light->visible_to_camera()) continue;  // hidden from camera rays
       Color le = light->le(st.ray.d);
       if (is_black(le)) continue;
       float w = 1.f;
@@ -72,6 +76,10 @@ class PathTracer {
     if (st.bounce == 0) st.hit_geometry = true;
     const InstanceRecord& inst = sc.instances[hit.inst];
     SurfaceInteraction si = make_interaction(inst, hit);
+    if (m_s.texture_filtering) {
+      st.cone_width += st.cone_spread * hit.t;  // ray_cone.h, eq. (29)
+      set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
+    }
     const Material* mat = sc.material_of(inst, hit.prim);
     Vec3f wo = -st.ray.d;
     bool shadow_requested = false;
@@ -134,6 +142,7 @@ class PathTracer {
     st.beta *= bs.weight;
     st.prev_pdf = bs.pdf;
     st.prev_delta = (bs.flags & k_bsdf_delta) != 0;
+    st.cone_spread += bsdf_spread_angle(bs);
     ++st.segments;
     ++st.bounce;
     // The next ray could only find emission; without hittable emitters it is not traced.
@@ -170,6 +179,7 @@ class PathTracer {
         continue;
       }
       st[i].ray = sc.camera.generate_ray(float(x) + samplers[i].get(0), float(y) + samplers[i].get(1));
+      st[i].cone_spread = m_pixel_spread * camera_sample_spread_scale(m_s.spp);
     }
     for (;;) {
       RayPacket rays;
@@ -252,6 +262,10 @@ class PathTracer {
     if (!sc.accel->intersect(ray, &hit)) return;  // film is initialised to background
     const InstanceRecord& inst = sc.instances[hit.inst];
     SurfaceInteraction si = make_interaction(inst, hit);
+    // The albedo label is filtered over the whole pixel's cone (no sub-pixel scaling):
+    // the pixel-centre ray stands for the pixel.
+    if (m_s.texture_filtering)
+      set_ray_cone_footprint(&si, inst, hit.prim, ray.d, m_pixel_spread * hit.t);
     const Material* mat = sc.material_of(inst, hit.prim);
     size_t i = size_t(y) * film->width + x;
     film->depth[i] = hit.t * z_per_t;
@@ -270,6 +284,7 @@ class PathTracer {
  private:
   const RenderScene& m_scene;
   const RenderSettings& m_s;
+  float m_pixel_spread;  ///< camera cone spread angle (0 without texture filtering)
 };
 
 }  // namespace

@@ -16,6 +16,9 @@ struct RenderSettings {
   uint64_t seed = 0;
   uint32_t threads = 0;      ///< 0 = all hardware threads
   uint32_t tile_size = 16;
+  /// Filter texture lookups over the ray-cone footprint (integrator/ray_cone.h); false =
+  /// point-sampled (bilinear, finest mip level) textures.
+  bool texture_filtering = true;
 
   void validate() const;
 };

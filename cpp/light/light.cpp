@@ -15,7 +15,10 @@ struct LightFactory {
 // Area lights are not plugins: the scene makes them from emissive materials.
 const LightFactory k_factories[] = {
     {"environment", create_environment_light},
+    {"envmap", create_envmap_light},
     {"point", create_point_light},
+    {"sky", create_sky_light},
+    {"spot", create_spot_light},
     {"sun", create_sun_light},
 };
 
@@ -41,6 +44,8 @@ std::shared_ptr<Light> create_light(const std::string& type, const ParamSet& par
                   "; known types: " + list + " (area lights come from emissive materials)");
     }
     params.check_unused("light '" + type + "'");
+  } catch (const FileError& e) {
+    throw e.with_context(context);
   } catch (const Error& e) {
     throw Error(context + ": " + e.what());
   }

@@ -1,7 +1,8 @@
 // Lights: what next-event estimation samples.
 //
-// Explicit lights ("point", "sun", "environment") are created by name from a ParamSet;
-// area lights are made by the scene from instances with emissive materials.
+// Explicit lights ("point", "spot", "sun", "environment", "envmap", "sky") are created by
+// name from a ParamSet; area lights are made by the scene from instances with emissive
+// materials.
 #pragma once
 
 #include <memory>
@@ -51,11 +52,14 @@ class Light {
   virtual Color le(const Vec3f& dir) const { return Color(0.f); }
   /// Infinite lights: solid-angle pdf with which `sample` produces `dir`.
   virtual float pdf_le(const Vec3f& dir) const { return 0.f; }
+  /// Infinite lights: whether camera rays see le() directly (false hides an environment
+  /// from the camera while it still lights the scene and shows in reflections).
+  virtual bool visible_to_camera() const { return true; }
   /// Called once per commit with the world bounds of the scene.
   virtual void preprocess(const Bounds3& scene_bounds) {}
 };
 
-/// Creates "point", "sun" or "environment" from parameters. Throws sg::Error naming `context`.
+/// Creates a light plugin (see light_types()) from parameters. Throws sg::Error naming `context`.
 std::shared_ptr<Light> create_light(const std::string& type, const ParamSet& params, const std::string& context);
 /// Registry keys of all light plugins.
 std::vector<std::string> light_types();

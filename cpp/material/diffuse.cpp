@@ -8,15 +8,15 @@ class DiffuseMaterial final : public Material {
  public:
   explicit DiffuseMaterial(std::shared_ptr<Texture> albedo) : m_albedo(std::move(albedo)) {}
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
-    return lambert::eval(si, wo, wi, m_albedo->eval(si.uv, si.uv_footprint));
+    return lambert::eval(si, wo, wi, eval_texture(*m_albedo, si));
   }
   float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     return lambert::pdf(si, wo, wi);
   }
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
-    return lambert::sample(si, wo, u, m_albedo->eval(si.uv, si.uv_footprint), out);
+    return lambert::sample(si, wo, u, eval_texture(*m_albedo, si), out);
   }
-  Color albedo(const SurfaceInteraction& si) const override { return m_albedo->eval(si.uv, si.uv_footprint); }
+  Color albedo(const SurfaceInteraction& si) const override { return eval_texture(*m_albedo, si); }
   uint32_t flags() const override { return k_bsdf_diffuse | k_bsdf_reflection; }
 
  private:

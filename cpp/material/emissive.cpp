@@ -15,15 +15,15 @@ class EmissiveMaterial final : public Material {
     m_reflects = !is_black(m_albedo->average());
   }
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
-    return m_reflects ? lambert::eval(si, wo, wi, m_albedo->eval(si.uv, si.uv_footprint)) : Color(0.f);
+    return m_reflects ? lambert::eval(si, wo, wi, eval_texture(*m_albedo, si)) : Color(0.f);
   }
   float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     return m_reflects ? lambert::pdf(si, wo, wi) : 0.f;
   }
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
-    return m_reflects && lambert::sample(si, wo, u, m_albedo->eval(si.uv, si.uv_footprint), out);
+    return m_reflects && lambert::sample(si, wo, u, eval_texture(*m_albedo, si), out);
   }
-  Color albedo(const SurfaceInteraction& si) const override { return m_albedo->eval(si.uv, si.uv_footprint); }
+  Color albedo(const SurfaceInteraction& si) const override { return eval_texture(*m_albedo, si); }
   uint32_t flags() const override { return m_reflects ? (k_bsdf_diffuse | k_bsdf_reflection) : k_bsdf_none; }
 
   Color emission(const SurfaceInteraction& si, const Vec3f& wo) const override {

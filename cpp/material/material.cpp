@@ -25,8 +25,12 @@ struct MaterialFactory {
 
 // The material plugins. One line per plugin (file material/<key>.cpp), alphabetical.
 const MaterialFactory k_factories[] = {
+    {"coated", create_coated_material},
+    {"conductor", create_conductor_material},
+    {"dielectric", create_dielectric_material},
     {"diffuse", create_diffuse_material},
     {"emissive", create_emissive_material},
+    {"mix", create_mix_material},
 };
 
 }  // namespace
@@ -52,6 +56,8 @@ std::shared_ptr<Material> create_material(const std::string& type, const ParamSe
                   "; known types: " + list);
     }
     params.check_unused("material '" + type + "'");
+  } catch (const FileError& e) {
+    throw e.with_context(context);
   } catch (const Error& e) {
     throw Error(context + ": " + e.what());
   }

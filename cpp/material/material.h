@@ -32,6 +32,10 @@ struct SurfaceInteraction {
   /// Width of the ray footprint in texture space (for filtered texture lookups); 0 means
   /// a point sample.
   float uv_footprint = 0.f;
+  /// Footprint ellipse in texture space (conjugate axes, full widths) for anisotropic
+  /// filtering; zero when unknown (then only `uv_footprint` is used). See eval_texture and
+  /// integrator/ray_cone.h.
+  Vec2f uv_axis_a, uv_axis_b;
   uint32_t inst = 0, prim = 0;
 
   /// Local shading frame: s = dpdu, t = ns x dpdu, n = ns.
@@ -43,6 +47,14 @@ struct SurfaceInteraction {
     return f;
   }
 };
+
+/// Texture lookup at an interaction, filtered over its footprint: anisotropically when the
+/// integrator provided the footprint ellipse, else isotropically over `uv_footprint`.
+/// Materials should look textures up through this rather than Texture::eval.
+inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
+  if (si.uv_axis_a.x != 0.f || si.uv_axis_a.y != 0.f) return t.eval_ellipse(si.uv, si.uv_axis_a, si.uv_axis_b);
+  return t.eval(si.uv, si.uv_footprint);
+}
 
 enum BsdfFlags : uint32_t {
   k_bsdf_none = 0,

@@ -1,86 +1,122 @@
-// Texture "image": an image file read through OpenImageIO (io/image_io.cpp),
-// bilinearly filtered, with repeat / clamp / mirror wrapping.
+// Texture "image": an image file read through OpenImageIO (io/image_io.cpp), mip-mapped
+// and filtered over the ray footprint (texture/mipmap.h: trilinear for an isotropic
+// width, Feline probes for a footprint ellipse), with repeat / clamp / mirror wrapping
+// and a 2D uv transform uv' = R S uv + offset (scale first, then rotate about the uv
+// origin, then offset).
+//
+// Parameters: filename, colorspace (auto/srgb/linear), wrap (repeat/clamp/mirror),
+// scale (colour multiplier), uv_scale [su, sv] (non-zero), uv_offset [ou, ov],
+// uv_rotation (degrees, counter-clockwise). Decoded pixels are shared through the
+// scene's ImageCache (texture/image_cache.h).
 #include <cmath>
+#include <sstream>
 
 #include "core/error.h"
 #include "io/image_io.h"
+#include "texture/image_cache.h"
+#include "texture/mipmap.h"
 #include "texture/texture.h"
 #include "texture/texture_registry.h"
 
 namespace sg {
 
-enum class Wrap { Repeat, Clamp, Mirror };
+namespace {
 
 class ImageTexture final : public Texture {
  public:
-  ImageTexture(ImageData img, Wrap wrap, const Color& scale) : m_img(std::move(img)), m_wrap(wrap), m_scale(scale) {
-    double acc[3] = {0, 0, 0};
-    size_t n = size_t(m_img.width) * m_img.height;
-    for (size_t i = 0; i < n; ++i)
-      for (int c = 0; c < 3; ++c) acc[c] += texel_channel(i, c);
-    m_average = Color(float(acc[0] / n), float(acc[1] / n), float(acc[2] / n)) * m_scale;
+  ImageTexture(std::shared_ptr<const MipMap> mip, const ImageTextureOptions& o)
+      : m_mip(std::move(mip)), m_wrap(o.wrap), m_scale(o.scale), m_offset(o.uv_offset) {
+    float a = o.uv_rotation_degrees * (k_pi / 180.f);
+    float c = std::cos(a), s = std::sin(a);
+    // M = R S, row-major: [c -s; s c] diag(su, sv).
+    m_m00 = c * o.uv_scale.x;
+    m_m01 = -s * o.uv_scale.y;
+    m_m10 = s * o.uv_scale.x;
+    m_m11 = c * o.uv_scale.y;
+    // NOTE: a uv-space footprint of width w becomes an ellipse with axes |su| w and
+    // |sv| w after S (R preserves lengths). The isotropic trilinear filter takes the major
+    // axis, as pbrt-v4's isotropic filters do (Pharr, Jakob, Humphreys 2023,
+    // MIPMap::Filter: width = 2 max |differential component|): blurring more along the
+    // minor axis never aliases.
+    m_footprint_scale = std::max(std::fabs(o.uv_scale.x), std::fabs(o.uv_scale.y));
+    m_identity = o.uv_scale.x == 1.f && o.uv_scale.y == 1.f && o.uv_rotation_degrees == 0.f &&
+                 o.uv_offset.x == 0.f && o.uv_offset.y == 0.f;
   }
 
-  Color eval(const Vec2f& uv, float /*footprint*/) const override {
+  Color eval(const Vec2f& uv, float footprint) const override {
+    Vec2f p = uv;
+    float w = footprint;
+    if (!m_identity) {
+      p = Vec2f(m_m00 * uv.x + m_m01 * uv.y + m_offset.x, m_m10 * uv.x + m_m11 * uv.y + m_offset.y);
+      w *= m_footprint_scale;
+    }
     // NOTE: texture space has v pointing up (glTF/OBJ convention); image rows go down.
-    float x = uv.x * m_img.width - 0.5f;
-    float y = (1.f - uv.y) * m_img.height - 0.5f;
-    float fx = std::floor(x), fy = std::floor(y);
-    float tx = x - fx, ty = y - fy;
-    int x0 = int(fx), y0 = int(fy);
-    Color c00 = texel(x0, y0), c10 = texel(x0 + 1, y0), c01 = texel(x0, y0 + 1), c11 = texel(x0 + 1, y0 + 1);
-    Color c = (c00 * (1 - tx) + c10 * tx) * (1 - ty) + (c01 * (1 - tx) + c11 * tx) * ty;
-    return c * m_scale;
+    return m_mip->lookup(p.x, 1.f - p.y, w, m_wrap) * m_scale;
   }
-  Color average() const override { return m_average; }
+  Color eval_ellipse(const Vec2f& uv, const Vec2f& axis_a, const Vec2f& axis_b) const override {
+    Vec2f p = uv, a = axis_a, b = axis_b;
+    if (!m_identity) {
+      // Axes are vectors: the linear part M = R S maps them exactly.
+      p = Vec2f(m_m00 * uv.x + m_m01 * uv.y + m_offset.x, m_m10 * uv.x + m_m11 * uv.y + m_offset.y);
+      a = Vec2f(m_m00 * axis_a.x + m_m01 * axis_a.y, m_m10 * axis_a.x + m_m11 * axis_a.y);
+      b = Vec2f(m_m00 * axis_b.x + m_m01 * axis_b.y, m_m10 * axis_b.x + m_m11 * axis_b.y);
+    }
+    // Image t = 1 - v: axis vectors flip their v component.
+    return m_mip->lookup_ellipse(p.x, 1.f - p.y, Vec2f(a.x, -a.y), Vec2f(b.x, -b.y), m_wrap) * m_scale;
+  }
+  Color average() const override { return m_mip->average() * m_scale; }
 
  private:
-  int wrap_coord(int i, int n) const {
-    switch (m_wrap) {
-      case Wrap::Clamp: return std::min(std::max(i, 0), n - 1);
-      case Wrap::Mirror: {
-        int period = 2 * n;
-        int m = ((i % period) + period) % period;
-        return m < n ? m : period - 1 - m;
-      }
-      default: return ((i % n) + n) % n;
-    }
-  }
-  float texel_channel(size_t pixel, int c) const {
-    int ch = m_img.channels >= 3 ? c : 0;
-    return m_img.pixels[pixel * m_img.channels + ch];
-  }
-  Color texel(int x, int y) const {
-    size_t i = size_t(wrap_coord(y, m_img.height)) * m_img.width + wrap_coord(x, m_img.width);
-    return Color(texel_channel(i, 0), texel_channel(i, 1), texel_channel(i, 2));
-  }
-
-  ImageData m_img;
-  Wrap m_wrap;
-  Color m_scale, m_average;
+  std::shared_ptr<const MipMap> m_mip;
+  WrapMode m_wrap;
+  Color m_scale;
+  Vec2f m_offset;
+  float m_m00 = 1.f, m_m01 = 0.f, m_m10 = 0.f, m_m11 = 1.f;
+  float m_footprint_scale = 1.f;
+  bool m_identity = true;
 };
 
-std::shared_ptr<Texture> make_image_texture(const ImageData& pixels, const Color& scale) {
-  return std::make_shared<ImageTexture>(pixels, Wrap::Repeat, scale);
+std::string format_vec2(const Vec2f& v) {
+  std::ostringstream s;
+  s << "[" << v.x << ", " << v.y << "]";
+  return s.str();
 }
 
-std::shared_ptr<Texture> create_image_texture(const ParamSet& params) {
+}  // namespace
+
+std::shared_ptr<Texture> make_image_texture(std::shared_ptr<const MipMap> mipmap, const ImageTextureOptions& options) {
+  return std::make_shared<ImageTexture>(std::move(mipmap), options);
+}
+
+std::shared_ptr<Texture> make_image_texture(const ImageData& pixels, const Color& scale) {
+  ImageTextureOptions o;
+  o.scale = scale;
+  return make_image_texture(std::make_shared<const MipMap>(pixels), o);
+}
+
+std::shared_ptr<Texture> create_image_texture(const ParamSet& params, ImageCache* images) {
+  const std::string ctx = "image texture";
   std::string filename = params.get_string("filename", "");
-  if (filename.empty()) throw Error("image texture: parameter 'filename' is required");
+  if (filename.empty()) throw Error(ctx + ": parameter 'filename' is required");
   std::string cs = params.get_string("colorspace", "auto");
-  std::string wrap_s = params.get_string("wrap", "repeat");
-  Color scale = params.get_color("scale", Color(1.f));
-  Wrap wrap;
-  if (wrap_s == "repeat") wrap = Wrap::Repeat;
-  else if (wrap_s == "clamp") wrap = Wrap::Clamp;
-  else if (wrap_s == "mirror") wrap = Wrap::Mirror;
-  else throw Error("image texture: 'wrap' must be repeat, clamp or mirror, got '" + wrap_s + "'");
+  ImageTextureOptions o;
+  o.wrap = parse_wrap_mode(params.get_string("wrap", "repeat"), ctx);
+  o.scale = params.get_color("scale", Color(1.f));
+  o.uv_scale = params.get_vec2("uv_scale", Vec2f(1.f, 1.f));
+  if (o.uv_scale.x == 0.f || o.uv_scale.y == 0.f)
+    throw Error(ctx + ": 'uv_scale' must be a non-zero number or two non-zero numbers, got " +
+                format_vec2(o.uv_scale));
+  o.uv_offset = params.get_vec2("uv_offset", Vec2f(0.f, 0.f));
+  o.uv_rotation_degrees = params.get_float("uv_rotation", 0.f);
   ColorSpace space;
   if (cs == "auto") space = ColorSpace::Auto;
   else if (cs == "srgb") space = ColorSpace::SRGB;
   else if (cs == "linear") space = ColorSpace::Linear;
-  else throw Error("image texture: 'colorspace' must be auto, srgb or linear, got '" + cs + "'");
-  return std::make_shared<ImageTexture>(load_image(filename, space), wrap, scale);
+  else throw Error(ctx + ": 'colorspace' must be auto, srgb or linear, got '" + cs + "'");
+  // Without a scene cache (standalone use), the texture owns its pyramid.
+  std::shared_ptr<const MipMap> mip =
+      images ? images->get(filename, space) : std::make_shared<const MipMap>(load_image(filename, space));
+  return make_image_texture(std::move(mip), o);
 }
 
 }  // namespace sg

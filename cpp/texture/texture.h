@@ -2,6 +2,8 @@
 // Created by name ("constant", "image") from a ParamSet; see texture/*.cpp.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <string>
 
@@ -16,14 +18,23 @@ class Texture {
   /// Linear RGB value at texture coordinate `uv`, filtered over a footprint of width
   /// `footprint` in texture space (0 = point sample).
   virtual Color eval(const Vec2f& uv, float footprint = 0.f) const = 0;
+  /// Linear RGB value filtered over the ellipse with conjugate axes `axis_a`, `axis_b`
+  /// (full widths, texture space), e.g. a ray cone's footprint on a slanted surface.
+  /// Default: the isotropic eval over the longer axis.
+  virtual Color eval_ellipse(const Vec2f& uv, const Vec2f& axis_a, const Vec2f& axis_b) const {
+    float la = axis_a.x * axis_a.x + axis_a.y * axis_a.y, lb = axis_b.x * axis_b.x + axis_b.y * axis_b.y;
+    return eval(uv, std::sqrt(std::max(la, lb)));
+  }
   /// Average value over the texture (used for light power estimates and albedo priors).
   virtual Color average() const = 0;
 };
 
-/// Creates a texture plugin by registry key. `base_dir` resolves relative file names.
+class ImageCache;
+/// Creates a texture plugin by registry key. Image files are decoded through `images`
+/// (the scene's shared cache, texture/image_cache.h; null = a private copy).
 /// Throws sg::Error naming `context` for unknown types or parameters.
 std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet& params,
-                                        const std::string& context);
+                                        const std::string& context, ImageCache* images = nullptr);
 
 std::shared_ptr<Texture> make_constant_texture(const Color& value);
 

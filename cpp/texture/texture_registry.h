@@ -7,5 +7,6 @@
 
 namespace sg {
 std::shared_ptr<Texture> create_constant_texture(const ParamSet& params);
-std::shared_ptr<Texture> create_image_texture(const ParamSet& params);
+class ImageCache;
+std::shared_ptr<Texture> create_image_texture(const ParamSet& params, ImageCache* images);
 }  // namespace sg

@@ -652,6 +652,46 @@ class ColorOrTexture(Field):
                            f"{_suggest(next(iter(value), ''), ['texture'])}")
 
 
+class MaterialName(str):
+    """A reference to another material by name (e.g. the components of a "mix");
+    ``loc`` is its position."""
+
+    loc: Loc
+
+
+class MaterialRef(String):
+    """Name of a material under 'materials' (resolved to an id when the scene is built)."""
+
+    type_name = "material name"
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        value = super().validate(value, loc, ctx)
+        name = MaterialName(value)
+        name.loc = loc
+        return name
+
+
+class ScalarOrTexture(Field):
+    """A number (range-checked) or a texture reference ``{texture: NAME}`` whose first
+    channel is used."""
+
+    def __init__(self, default: Any = REQUIRED, *, min: Optional[float] = None, max: Optional[float] = None,
+                 doc: str = ""):
+        super().__init__(default, doc)
+        self.number = Number(min=min, max=max)
+
+    def describe(self) -> str:
+        return self.number.describe() + ", or {texture: NAME}"
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        if isinstance(value, Mapping) and "texture" in value:
+            rec = _TEXTURE_REF.validate(value, loc, ctx)
+            name = TextureName(rec["texture"])
+            name.loc = rec.locs["texture"]
+            return name
+        return self.number.validate(value, loc, ctx)
+
+
 class Validated(dict):
     """A validated record: a dict of every field (defaults filled in) that also keeps
     ``loc`` (its own location), ``locs`` (location of each given key's value) and
@@ -911,6 +951,9 @@ TEXTURE = Record({
                              doc="how to decode the pixels (auto: 8-bit images are sRGB)"),
         "wrap": Choice(["repeat", "clamp", "mirror"], "repeat", doc="behaviour outside [0, 1] uv"),
         "scale": _color((1.0, 1.0, 1.0), None, None, "multiplies the texel values"),
+        "uv_scale": Vector(2, (1.0, 1.0), broadcast=True, doc="uv scale S in uv' = R S uv + offset (non-zero)"),
+        "uv_offset": Vector(2, (0.0, 0.0), broadcast=True, doc="uv offset, applied last"),
+        "uv_rotation": Number(0.0, doc="counter-clockwise uv rotation in degrees, after scaling"),
     },
     "constant": {
         "value": _color((1.0, 1.0, 1.0), None, None, "the constant colour"),
@@ -918,7 +961,7 @@ TEXTURE = Record({
 }, doc="texture")
 
 MATERIAL = Record({
-    "type": Choice(["diffuse", "emissive"], doc="material plugin"),
+    "type": Choice(["diffuse", "emissive", "coated", "mix"], doc="material plugin"),
 }, tag="type", variants={
     "diffuse": {
         "albedo": ColorOrTexture((0.5, 0.5, 0.5), min=0, max=1, doc="Lambertian reflectance"),
@@ -928,6 +971,17 @@ MATERIAL = Record({
         "strength": Number(1.0, min=0, doc="multiplies radiance"),
         "albedo": ColorOrTexture((0.0, 0.0, 0.0), min=0, max=1, doc="diffuse reflectance of the emitter"),
         "two_sided": Bool(False, doc="emit from both faces (default: the front face only)"),
+    },
+    "coated": {
+        "albedo": ColorOrTexture((0.5, 0.5, 0.5), min=0, max=1, doc="Lambertian base reflectance"),
+        "ior": Number(1.5, min=1, max=4, doc="index of refraction of the coat (1: no coat)"),
+        "roughness": Number(0.0, min=0, max=1, doc="coat roughness (GGX alpha = roughness^2; 0: smooth)"),
+        "specular": Number(1.0, min=0, max=1, doc="scales the coat reflection (the rest is absorbed)"),
+    },
+    "mix": {
+        "material_a": MaterialRef(doc="material used where weight = 0"),
+        "material_b": MaterialRef(doc="material used where weight = 1"),
+        "weight": ScalarOrTexture(0.5, min=0, max=1, doc="fraction of material_b (a texture: its first channel)"),
     },
 }, doc="material")
 
@@ -985,7 +1039,7 @@ OBJECT = Record({
 OBJECT.fields["rotate"].doc = "rotation {axis, angle} or {euler, order}, in degrees"
 
 LIGHT = Record({
-    "type": Choice(["sun", "environment", "point"], doc="light plugin"),
+    "type": Choice(["sun", "environment", "point", "envmap", "sky", "spot"], doc="light plugin"),
     "name": String(None, doc="free name, reported in meta.json"),
 }, tag="type", variants={
     "point": {
@@ -1004,6 +1058,31 @@ LIGHT = Record({
         "radiance": _color((1.0, 1.0, 1.0), 0, None, "constant sky radiance per channel"),
         "strength": Number(1.0, min=0, doc="multiplies radiance"),
     },
+    "envmap": {
+        "file": FilePath(doc="equirectangular HDR image (EXR/HDR, linear), relative to the scene file"),
+        "strength": Number(1.0, min=0, doc="multiplies the map"),
+        "rotation": Number(0.0, doc="rotation in degrees about the map's up axis (right-handed)"),
+        "up": Vector(3, (0.0, 1.0, 0.0), doc="world direction of the map's top row"),
+        "visible": Bool(True, doc="whether camera rays see the map directly"),
+    },
+    "sky": {
+        "elevation": Number(45.0, min=0, max=90, doc="sun elevation above the horizon, degrees"),
+        "azimuth": Number(0.0, doc="sun compass bearing in degrees: 0 = -z, 90 = +x, 180 = +z"),
+        "turbidity": Number(3.0, min=1.7, max=10, doc="atmospheric turbidity (Preetham 1999)"),
+        "strength": Number(1.0, min=0, doc="multiplies sky and sun (radiance in luminance / 683 lm/W)"),
+        "ground_albedo": _color((0.2, 0.2, 0.2), 0, 1, "reflectance of the ground below the horizon"),
+        "sun": Bool(True, doc="add the 0.53 degree sun disc with Preetham's attenuated radiance"),
+        "visible": Bool(True, doc="whether camera rays see the sky directly"),
+    },
+    "spot": {
+        "position": Vector(3, (0.0, 0.0, 0.0), doc="light position"),
+        "direction": Vector(3, (0.0, -1.0, 0.0), doc="cone axis"),
+        "intensity": _color((1.0, 1.0, 1.0), 0, None, "radiant intensity on the axis, W/sr per channel"),
+        "strength": Number(1.0, min=0, doc="multiplies intensity"),
+        "cone_angle": Number(30.0, min=0, max=180, min_open=True, doc="half-angle where the light ends, degrees"),
+        "falloff_start": Number(None, min=0, max=180,
+                                doc="half-angle where the smooth falloff starts, degrees (default min(25, cone_angle))"),
+    },
 }, doc="light (area lights come from emissive materials)")
 
 RENDER = Record({
@@ -1013,6 +1092,7 @@ RENDER = Record({
     "seed": Integer(0, min=0, max=(1 << 64) - 1, doc="random seed (images are deterministic per seed)"),
     "threads": Integer(0, min=0, max=4096, doc="worker threads (0: all cores)"),
     "tile_size": Integer(16, min=1, max=4096, doc="tile edge in pixels"),
+    "texture_filtering": Bool(True, doc="filter textures over the ray footprint (ray cones)"),
 }, default=EMPTY, doc="render settings (keyword arguments of Scene.render)")
 
 SCENE_SCHEMA = Record({
@@ -1125,6 +1205,33 @@ def _params(rec: Validated, skip: Iterable[str] = ("type", "name")) -> Dict[str,
     return out
 
 
+def _material_order(mats: Mapping[str, Validated], ctx: ValidationContext) -> List[str]:
+    """Material names ordered so that every material comes after the materials it refers
+    to (e.g. the components of a "mix"); a reference cycle is an error at its entry."""
+    order: List[str] = []
+    state: Dict[str, int] = {}  # 1: visiting, 2: done
+
+    def visit(name: str, via: Optional[Loc]) -> None:
+        if state.get(name) == 2:
+            return
+        if state.get(name) == 1:
+            ctx.error(via or mats[name].loc, f"material '{name}' refers to itself through a reference cycle")
+        state[name] = 1
+        for v in mats[name].values():
+            if isinstance(v, MaterialName) and str(v) in mats:
+                visit(str(v), v.loc)
+        state[name] = 2
+        order.append(name)
+
+    for n, mat in mats.items():  # unknown names first, with the full list of materials
+        for v in mat.values():
+            if isinstance(v, MaterialName) and str(v) not in mats:
+                _lookup(ctx, {k: 0 for k in mats}, str(v), v.loc, "material", "materials")
+    for n in mats:
+        visit(n, None)
+    return order
+
+
 def _lookup(ctx: ValidationContext, table: Mapping[str, int], name: str, loc: Loc, what: str, section: str) -> int:
     if name not in table:
         defined = ", ".join(sorted(table)) if table else "none"
@@ -1181,11 +1288,14 @@ def build_validated(spec: Validated, ctx: ValidationContext) -> Tuple[Scene, Dic
             textures[name] = scene.add_texture(tex["type"], params)
 
     materials: Dict[str, int] = meta["materials"]
-    for name, mat in spec["materials"].items():
+    for name in _material_order(spec["materials"], ctx):
+        mat = spec["materials"][name]
         params = _params(mat)
         for k, v in params.items():
             if isinstance(v, TextureName):
                 params[k] = TextureRef(_lookup(ctx, textures, str(v), v.loc, "texture", "textures"))
+            elif isinstance(v, MaterialName):
+                params[k] = _lookup(ctx, materials, str(v), v.loc, "material", "materials")
         with ctx.core(mat.loc):
             materials[name] = scene.add_material(mat["type"], params)
 
@@ -1227,8 +1337,11 @@ def build_validated(spec: Validated, ctx: ValidationContext) -> Tuple[Scene, Dic
         meta["objects"].append(info)
 
     for light in spec["lights"]:
+        params = _params(light)
+        if "file" in params:
+            params["filename"] = params.pop("file")
         with ctx.core(light.loc):
-            lid = scene.add_light(light["type"], _params(light))
+            lid = scene.add_light(light["type"], params)
         meta["lights"].append({"name": light.get("name"), "type": light["type"], "id": lid})
 
     camera = camera_from_spec(spec["camera"], ctx)

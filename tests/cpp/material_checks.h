@@ -184,4 +184,117 @@ inline void check_white_furnace(const sg::Material& mat, const sg::SurfaceIntera
 /// grazing (0.01) on the front side, and one from the back side.
 inline std::vector<double> incoming_cosines() { return {1.0, 0.7, 0.3, 0.1, 0.01, -0.5}; }
 
+
+/// A Dirac lobe seen by check_sampling_with_deltas: its direction, the probability that
+/// sample() returns it (BsdfSample::pdf of a delta sample), its mass (weight * pdf, the
+/// fraction of light it reflects or transmits, per channel) and how often it was drawn.
+struct DeltaLobe {
+  sg::Vec3f wi;
+  double probability = 0.0;
+  sg::Color mass;
+  int count = 0;
+};
+
+/// check_sampling for materials with Dirac lobes (a smooth coat, glass, a mix with
+/// either). Non-delta samples are checked exactly as in check_sampling (binned against
+/// pdf(), weight == eval / pdf, sample pdf == pdf()). Delta samples are grouped by
+/// direction (within 1e-4); within a group the reported pdf and mass must be constant
+/// (rel 1e-5), and each group becomes one more chi-square cell whose expected count is
+/// N * its reported probability. So the test fails if a delta lobe is drawn more or less
+/// often than its pdf says, or if pdf() misdescribes the non-delta part. At most 4 delta
+/// directions are expected. Returns the delta lobes for analytic checks of their masses.
+/// `cell_eps` is the absolute quadrature tolerance per cell (probability units) of the
+/// expected counts: 1e-9 as in check_sampling; glossy lobes evaluated in float cannot
+/// converge that far (float noise of a cell's integral is ~1e-9) and then recurse to the
+/// maximum depth, so their tests pass 1e-7 (an expected-count error of at most 0.1 per
+/// cell at 10^6 samples, far below the Poisson noise sqrt(expected)).
+inline std::vector<DeltaLobe> check_sampling_with_deltas(const sg::Material& mat, const sg::SurfaceInteraction& si,
+                                                        const sg::Vec3f& wo, uint64_t seed, const std::string& what,
+                                                        int n_samples = 1000000, double cell_eps = 1e-9) {
+  DFrame frame(to_d(si.ng));
+  Grid2D g{32, 64, -1.0, 1.0, 0.0, 2.0 * k_pi_d};
+  sg::Pcg32 rng(seed);
+  std::vector<double> obs(g.size(), 0.0);
+  std::vector<DeltaLobe> deltas;
+  int n_bad_weight = 0, n_bad_pdf = 0, n_bad_dir = 0, n_bad_delta = 0;
+  std::string first_problem;
+  for (int i = 0; i < n_samples; ++i) {
+    float u_lobe = rng.next_float();
+    sg::Vec2f u = rng.next_2d();
+    sg::BsdfSample bs;
+    if (!mat.sample(si, wo, u_lobe, u, &bs)) continue;
+    if (!(std::fabs(sg::length(bs.wi) - 1.f) < 1e-5f)) {
+      ++n_bad_dir;
+      continue;
+    }
+    if (bs.flags & sg::k_bsdf_delta) {
+      sg::Color mass = bs.weight * bs.pdf;
+      DeltaLobe* lobe = nullptr;
+      for (auto& d : deltas)
+        if (sg::length(d.wi - bs.wi) < 1e-4f) lobe = &d;
+      if (!lobe) {
+        deltas.push_back({bs.wi, double(bs.pdf), mass, 0});
+        lobe = &deltas.back();
+      }
+      ++lobe->count;
+      bool same = bs.pdf > 0.f && rel_diff(bs.pdf, lobe->probability) <= 1e-5;
+      for (int k = 0; k < 3; ++k) same = same && rel_diff(mass[k], lobe->mass[k]) <= 1e-5;
+      if (!same && n_bad_delta++ == 0)
+        first_problem += " delta lobe with varying pdf " + std::to_string(bs.pdf) + " / mass " +
+                         std::to_string(mass.x) + ";";
+      continue;
+    }
+    double z, phi;
+    sphere_coords(frame, to_d(bs.wi), &z, &phi);
+    long c = g.cell(z, phi);
+    if (c < 0) {
+      ++n_bad_dir;
+      continue;
+    }
+    obs[size_t(c)] += 1.0;
+    sg::Color f = mat.eval(si, wo, bs.wi);
+    float pdf = mat.pdf(si, wo, bs.wi);
+    if (!(std::fabs(pdf - bs.pdf) <= 1e-4 * std::max(pdf, bs.pdf) + 1e-6)) {
+      if (n_bad_pdf++ == 0)
+        first_problem += " pdf mismatch: sample " + std::to_string(bs.pdf) + " vs pdf() " + std::to_string(pdf) + ";";
+    }
+    bool weight_ok = pdf > 0.f;
+    for (int k = 0; k < 3 && weight_ok; ++k) weight_ok = rel_diff(bs.weight[k], f[k] / pdf) <= 1e-4;
+    if (!weight_ok && n_bad_weight++ == 0)
+      first_problem += " weight " + std::to_string(bs.weight.x) + " vs eval/pdf " + std::to_string(f.x / pdf) + ";";
+  }
+  EXPECT_EQ(n_bad_dir, 0) << what << ": sampled directions not unit length";
+  EXPECT_EQ(n_bad_pdf, 0) << what << ":" << first_problem;
+  EXPECT_EQ(n_bad_weight, 0) << what << ":" << first_problem;
+  EXPECT_EQ(n_bad_delta, 0) << what << ":" << first_problem;
+  EXPECT_LE(deltas.size(), 4u) << what << ": more delta directions than expected";
+  auto exp = expected_counts(
+      g,
+      [&](double z, double phi) { return double(mat.pdf(si, wo, to_f(sphere_dir(frame, z, phi)))); },
+      double(n_samples), cell_eps, 16);
+  for (const auto& d : deltas) {
+    obs.push_back(double(d.count));
+    exp.push_back(double(n_samples) * d.probability);
+  }
+  EXPECT_LE(sum(exp) / n_samples, 1.0 + 1e-3) << what << ": pdf plus delta probabilities exceed 1";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << what << ": " << r.message;
+  return deltas;
+}
+
+/// Directional albedo of the non-delta lobes: the integral of luminance(eval) over the
+/// sphere, as a sum of per-cell adaptive quadratures on the check_sampling grid (so that
+/// narrow glossy lobes are resolved), independent of sample().
+inline double eval_integral(const sg::Material& mat, const sg::SurfaceInteraction& si, const sg::Vec3f& wo,
+                            double cell_eps = 1e-9) {
+  DFrame frame(to_d(si.ng));
+  Grid2D g{32, 64, -1.0, 1.0, 0.0, 2.0 * k_pi_d};
+  return sum(expected_counts(
+      g,
+      [&](double z, double phi) {
+        return double(sg::luminance(mat.eval(si, wo, to_f(sphere_dir(frame, z, phi)))));
+      },
+      1.0, cell_eps, 16));
+}
+
 }  // namespace sgtest

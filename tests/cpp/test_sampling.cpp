@@ -274,3 +274,67 @@ TEST(sampling, power_heuristic) {
   EXPECT_EQ(power_heuristic(0.f, 1.f), 0.f);
   EXPECT_EQ(power_heuristic(k_inf, 1.f), 1.f);
 }
+
+// Distribution2D: sampled points against pdf() on a grid twice as fine as the cells
+// (so the uniformity inside each cell is tested too), with a zero cell and a zero row.
+TEST(sampling, distribution2d_chi2) {
+  const size_t nu = 7, nv = 5;
+  std::vector<float> w(nu * nv);
+  for (size_t i = 0; i < w.size(); ++i) w[i] = float(1 + (i * 7919) % 13);
+  w[3] = 0.f;                                    // a zero cell
+  for (size_t x = 0; x < nu; ++x) w[2 * nu + x] = 0.f;  // a zero row
+  w[4 * nu + 6] = 60.f;                          // a dominant cell
+  Distribution2D dist(w, nu, nv);
+  ASSERT_EQ(dist.width(), nu);
+  ASSERT_EQ(dist.height(), nv);
+  double total = 0.0;
+  for (float x : w) total += x;
+  EXPECT_NEAR(dist.total() / total, 1.0, 1e-6);
+  // pdf_cell = weight / total * (number of cells): a density on the unit square.
+  for (size_t y = 0; y < nv; ++y)
+    for (size_t x = 0; x < nu; ++x)
+      EXPECT_NEAR(dist.pdf_cell(x, y), w[y * nu + x] / total * double(nu * nv), 1e-5) << x << ", " << y;
+  Grid2D g{int(2 * nu), int(2 * nv), 0.0, 1.0, 0.0, 1.0};
+  Pcg32 rng(11);
+  std::vector<double> obs(g.size(), 0.0);
+  int bad = 0;
+  for (int i = 0; i < k_samples; ++i) {
+    float pdf = -1.f;
+    Vec2f p = dist.sample(rng.next_2d(), &pdf);
+    if (!(p.x >= 0.f && p.x < 1.f && p.y >= 0.f && p.y < 1.f) || pdf != dist.pdf(p) || !(pdf > 0.f)) {
+      ++bad;
+      continue;
+    }
+    obs[size_t(g.cell(p.x, p.y))] += 1.0;
+  }
+  EXPECT_EQ(bad, 0) << "samples outside [0, 1)^2, or whose pdf differs from pdf() at the point";
+  auto exp = expected_counts(g, [&](double x, double y) { return double(dist.pdf(Vec2f(float(x), float(y)))); },
+                             k_samples);
+  EXPECT_NEAR(sum(exp) / k_samples, 1.0, 1e-4) << "pdf does not integrate to 1";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+// Large grids with sizes that are not powers of two: rounding of (i + r) / n must never
+// move a sample into a neighbouring cell (pdf(sample) is exactly the sampled cell's pdf).
+TEST(sampling, distribution2d_points_stay_in_their_cell) {
+  const size_t nu = 4099, nv = 2047;
+  std::vector<float> w(nu * nv);
+  Pcg32 fill(12);
+  for (float& x : w) x = fill.next_float() < 0.5f ? 0.f : fill.next_float();
+  Distribution2D dist(w, nu, nv);
+  Pcg32 rng(13);
+  int bad = 0;
+  for (int i = 0; i < 200000; ++i) {
+    // Include u close to 1, where the remapped sample is close to the cell's far edge.
+    Vec2f u = i % 2 ? rng.next_2d() : Vec2f(k_one_minus_epsilon - rng.next_float() * 1e-6f, rng.next_float());
+    float pdf;
+    Vec2f p = dist.sample(u, &pdf);
+    bad += !(pdf > 0.f) || pdf != dist.pdf(p) || !(p.x < 1.f && p.y < 1.f);
+  }
+  EXPECT_EQ(bad, 0);
+  // All-zero weights fall back to uniform.
+  Distribution2D z(std::vector<float>(6, 0.f), 3, 2);
+  EXPECT_FLOAT_EQ(z.pdf(Vec2f(0.9f, 0.1f)), 1.f);
+  EXPECT_THROW(Distribution2D(std::vector<float>(5, 1.f), 3, 2), Error);
+}

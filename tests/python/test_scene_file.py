@@ -249,7 +249,8 @@ def test_yaml12_floats_and_defaults(tmp_path):
     p = write(tmp_path, CAMERA + "objects: [{primitive: sphere, radius: 5e-1, class_id: 1}]\n"
                                  "lights: [{type: point, position: [0, 0, -3], intensity: 1.0e1}]\n")
     scene, settings, meta = load_scene(p)
-    assert settings == {"spp": 16, "max_depth": 8, "rr_depth": 5, "seed": 0, "threads": 0, "tile_size": 16}
+    assert settings == {"spp": 16, "max_depth": 8, "rr_depth": 5, "seed": 0, "threads": 0, "tile_size": 16,
+                        "texture_filtering": True}
     assert meta["objects"][0]["instance_id"] == 1 and meta["objects"][0]["class_id"] == 1
     assert meta["lights"] == [{"name": None, "type": "point", "id": 0}]
 

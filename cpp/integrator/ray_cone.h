@@ -1,0 +1,140 @@
+// Ray cones for texture level of detail: every path carries a cone (width, spread
+// angle) whose footprint on a hit triangle, mapped to texture space, is the filter width
+// of the texture lookups there (SurfaceInteraction::uv_footprint).
+//
+// NOTE: Akenine-Moller, Nilsson, Andersson, Barre-Brisebois, Toth, Karras, "Texture
+// Level of Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems ch. 20, 2019,
+// sec. 20.3.4 (equation numbers of the chapter):
+//  - camera spread angle gamma_0 = arctan(2 tan(psi/2) / H) (eq. (30)); for a pinhole with
+//    focal length f pixels 2 tan(psi/2) / H = 1/f, so gamma_0 = arctan(1/f);
+//  - propagation w_i = w_{i-1} + gamma_{i-1} t_i, gamma_i = gamma_{i-1} + beta_i (eq. (29));
+//  - footprint: lambda = Delta + log2|w_i| - log2|n.d| (eq. (34)) with the triangle LOD
+//    Delta = 0.5 log2(t_a / p_a) (texture-space over world-space triangle area); without
+//    the log and the texture resolution (applied by the texture itself, mipmap.h), the
+//    uv-space width is w_i / |n.d| * sqrt(uv area / world area).
+// Beyond the chapter, the footprint is also given as an ellipse (minor axis w across the
+// ray, major axis w / |n.d| along it, mapped to uv exactly) so that image textures filter
+// anisotropically: the isotropic width over-blurs surfaces seen at grazing angles by
+// 1/|n.d| across the ray.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "camera/camera.h"
+#include "integrator/render_scene.h"
+#include "material/material.h"
+
+namespace sg {
+
+/// Full cone angle of one pixel at the principal point (eq. (30)); with fx != fy the
+/// larger of the two pixel angles (the cone is isotropic, so the conservative one).
+inline float pixel_spread_angle(const PinholeCamera& camera) {
+  return std::atan(1.f / std::min(camera.fx, camera.fy));
+}
+
+/// sqrt(uv area / world area) of triangle `prim` of `inst` (world area after the instance
+/// transform). Meshes without uvs use the barycentric parameterization (uv area 1/2).
+/// Returns 0 for a degenerate uv mapping (the lookup is then a point sample).
+inline float uv_per_world_length(const InstanceRecord& inst, uint32_t prim) {
+  const TriangleMesh& m = *inst.mesh;
+  uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
+  const Transform& T = inst.world_from_object;
+  float world2 = length(cross(T.apply_vector(m.positions[i1] - m.positions[i0]),
+                              T.apply_vector(m.positions[i2] - m.positions[i0])));
+  float uv2 = 1.f;  // twice the area of the barycentric triangle
+  if (!m.uvs.empty()) {
+    Vec2f a = m.uvs[i1] - m.uvs[i0], b = m.uvs[i2] - m.uvs[i0];
+    uv2 = std::fabs(a.x * b.y - a.y * b.x);
+  }
+  float r = std::sqrt(uv2 / world2);
+  return std::isfinite(r) ? r : 0.f;
+}
+
+/// Texture-space footprint width of a cone of width `cone_width` arriving along unit
+/// direction `d` on a surface with geometric normal `ng` (eq. (34) without the log).
+inline float ray_cone_uv_footprint(float cone_width, const Vec3f& ng, const Vec3f& d, float uv_per_world) {
+  if (!(uv_per_world > 0.f) || !(cone_width > 0.f)) return 0.f;
+  float cos_theta = std::fabs(dot(ng, d));
+  // Exactly grazing: infinite footprint, i.e. the texture average (mipmap top level).
+  return cos_theta > 0.f ? cone_width * uv_per_world / cos_theta : k_inf;
+}
+
+/// The cone's footprint ellipse on the triangle's plane, mapped to uv space: conjugate
+/// axes (full widths) `axis_a` (major: w / |n.d| along the projection of d on the plane)
+/// and `axis_b` (minor: w across). Returns false when there is none (head-on degenerate
+/// uv mapping, exactly grazing ray).
+/// NOTE: the cone of width w cut by a plane at incidence theta is an ellipse with axes w
+/// and w / cos(theta) (the anisotropic counterpart of eq. (34)'s 1/|n.d| term); world
+/// tangent vectors are mapped to uv through the triangle's affine parameterization
+/// v = alpha e1 + beta e2 -> alpha duv1 + beta duv2 (pbrt-v4 sec. 6.5.3 solves the same
+/// 2x2 system for dp/du, dp/dv), which is exact for any (also stretched) uv mapping.
+inline bool ray_cone_uv_ellipse(const InstanceRecord& inst, uint32_t prim, const Vec3f& ng, const Vec3f& d,
+                                float cone_width, Vec2f* axis_a, Vec2f* axis_b) {
+  float cos_theta = std::fabs(dot(ng, d));
+  if (!(cone_width > 0.f) || !(cos_theta > 1e-6f)) return false;
+  const TriangleMesh& m = *inst.mesh;
+  uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
+  const Transform& T = inst.world_from_object;
+  Vec3f e1 = T.apply_vector(m.positions[i1] - m.positions[i0]), e2 = T.apply_vector(m.positions[i2] - m.positions[i0]);
+  Vec2f u1(1.f, 0.f), u2(0.f, 1.f);  // barycentric parameterization without uvs
+  if (!m.uvs.empty()) {
+    u1 = m.uvs[i1] - m.uvs[i0];
+    u2 = m.uvs[i2] - m.uvs[i0];
+  }
+  float g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
+  float det = g11 * g22 - g12 * g12;
+  if (!(det > 0.f)) return false;
+  Vec3f dp = d - ng * dot(d, ng);  // projection of the ray direction on the plane
+  float lp = length(dp);
+  Vec3f ta = lp > 1e-6f ? dp / lp : e1 / std::sqrt(g11);  // head-on: any tangent
+  Vec3f tb = cross(ng, ta);
+  auto to_uv = [&](const Vec3f& v) {
+    float r1 = dot(e1, v), r2 = dot(e2, v);
+    float alpha = (g22 * r1 - g12 * r2) / det, beta = (g11 * r2 - g12 * r1) / det;
+    return u1 * alpha + u2 * beta;
+  };
+  *axis_a = to_uv(ta * (cone_width / cos_theta));
+  *axis_b = to_uv(tb * cone_width);
+  return std::isfinite(axis_a->x) && std::isfinite(axis_a->y) && std::isfinite(axis_b->x) &&
+         std::isfinite(axis_b->y);
+}
+
+/// Sets the texture footprint of `si` (hit of triangle `prim` of `inst` along unit
+/// direction `d`) for a cone of width `cone_width` there: the isotropic width of eq. (34)
+/// and the anisotropic ellipse.
+inline void set_ray_cone_footprint(SurfaceInteraction* si, const InstanceRecord& inst, uint32_t prim, const Vec3f& d,
+                                   float cone_width) {
+  si->uv_footprint = ray_cone_uv_footprint(cone_width, si->ng, d, uv_per_world_length(inst, prim));
+  if (!ray_cone_uv_ellipse(inst, prim, si->ng, d, cone_width, &si->uv_axis_a, &si->uv_axis_b))
+    si->uv_axis_a = si->uv_axis_b = Vec2f(0.f, 0.f);
+}
+
+/// Spread angle beta added by a BSDF-sampled bounce.
+/// NOTE: the chapter (sec. 20.3.4) only treats perfect reflection, where beta comes from
+/// the surface curvature; triangles are flat, so a Dirac (delta) bounce adds nothing here
+/// (exact for planar mirrors and glass, too narrow on curved ones: the curvature term is
+/// not implemented). For a non-delta lobe the sampled direction stands for a solid angle
+/// of about 1/pdf (the footprint of a sampled direction in Suykens & Willems, "Path
+/// Differentials and Applications", EGWR 2001, sec. 4); the full angle of a cone of that
+/// solid angle is 2 / sqrt(pi pdf) (small-angle cone, Omega = pi (alpha/2)^2). It is
+/// clamped to pi/8, the spread a fully rough (diffuse) bounce adds in Unity HDRP's path
+/// tracer (roughnessToSpreadAngle = roughness pi/8): diffuse bounces get a wide cone, so
+/// textures seen only indirectly are filtered strongly (little variance, slight blur);
+/// sharp glossy lobes (pdf >> 1) keep narrow cones.
+inline float bsdf_spread_angle(const BsdfSample& bs) {
+  constexpr float k_max_spread = k_pi / 8.f;
+  if (bs.flags & k_bsdf_delta) return 0.f;
+  if (!(bs.pdf > 0.f)) return k_max_spread;
+  return std::min(k_max_spread, 2.f / std::sqrt(k_pi * bs.pdf));
+}
+
+/// NOTE: with spp samples per pixel each camera sample stands for a sub-pixel of width
+/// 1/sqrt(spp); pbrt-v4 scales its camera ray differentials the same way, by
+/// max(1/8, 1/sqrt(spp)) (Pharr, Jakob, Humphreys 2023, RayIntegrator::EvaluatePixelSample).
+/// The pixel box filter then does the rest of the antialiasing.
+inline float camera_sample_spread_scale(uint32_t spp) {
+  return std::max(0.125f, 1.f / std::sqrt(float(std::max<uint32_t>(spp, 1))));
+}
+
+}  // namespace sg

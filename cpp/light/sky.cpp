@@ -1,0 +1,368 @@
+// Light "sky": a physical clear daylight sky with its sun, after A. J. Preetham, P. Shirley,
+// B. Smits, "A Practical Analytic Model for Daylight", SIGGRAPH 1999 (below: "Preetham").
+//
+// Parameters:
+//   elevation      sun elevation above the horizon, degrees in [0, 90] (45)
+//   azimuth        sun azimuth, degrees (0): a compass bearing, clockwise seen from above,
+//                  with north = -z and east = +x (y up): azimuth 0 puts the sun towards -z,
+//                  90 towards +x, 180 towards +z, 270 towards -x. The sun direction is
+//                  (cos(el) sin(az), sin(el), -cos(el) cos(az)); in an "envmap" (rotation 0)
+//                  the same direction lies at u = azimuth / 360.
+//   turbidity      atmospheric turbidity T in [1.7, 10] (3): 2 very clear, 3 clear, 6 hazy
+//   strength       scale of sky, sun and ground radiance, >= 0 (1)
+//   ground_albedo  colour in [0, 1] (0.2): below the horizon the sky shows a Lambertian
+//                  ground of this albedo lit by the sky and the sun (unshadowed), radiance
+//                  albedo x E_h / pi with E_h the horizontal irradiance of sky + sun (the
+//                  "ground glow" of Radiance's gensky, whose default reflectance is 0.2)
+//   sun            add the sun disc (true): angular diameter 0.53 degrees, radiance of the
+//                  extraterrestrial solar spectrum attenuated by the atmosphere (Preetham
+//                  appendix A.1), not clipped by the horizon
+//   visible        whether camera rays see sky and sun directly (true); they always light
+//                  the scene
+//
+// Units: radiance in W/(m^2 sr) per linear sRGB channel such that its Rec. 709 luminance
+// is the photometric luminance / 683 lm/W, for sky (Preetham's zenith luminance is in
+// kcd/m^2) and sun (spectral radiance weighted by the CIE y-bar function) alike. A clear
+// sky with a high sun gives 150-200 W/m^2 of such irradiance on the ground (100-130 klx);
+// use `strength` to bring it to the range you want.
+//
+// Implementation: le() evaluates the analytic model; for importance sampling the sky is
+// tabulated at pixel centres into a 256 x 128 equirectangular luminance map (light/equirect.h,
+// shared with "envmap"), and the sun is a disc light (light/sun.cpp, by composition). A
+// light sample picks the sun or the sky table with fixed probabilities; pdf_le() is the
+// mixture density, so sample() and pdf_le() agree everywhere.
+#include <cmath>
+
+#include "core/sampling.h"
+#include "light/equirect.h"
+#include "light/light_registry.h"
+
+namespace sg {
+
+namespace {
+
+constexpr double k_pi_d = 3.14159265358979323846;
+constexpr int k_table_width = 256, k_table_height = 128;  // even height: the horizon is a row edge
+constexpr double k_sun_diameter_deg = 0.53;
+/// NOTE: luminous efficacy of 555 nm radiation, 683 lm/W (CIE); converts the photometric
+/// quantities of the model to the radiometric units of the renderer.
+constexpr double k_lm_per_w = 683.0;
+
+struct PerezCoefficients {
+  double a, b, c, d, e;
+};
+
+// NOTE: distribution coefficients for luminance Y and chromaticities x, y, linear in the
+// turbidity T: Preetham appendix A.2.
+PerezCoefficients perez_Y(double t) {
+  return {0.1787 * t - 1.4630, -0.3554 * t + 0.4275, -0.0227 * t + 5.3251, 0.1206 * t - 2.5771, -0.0670 * t + 0.3703};
+}
+PerezCoefficients perez_x(double t) {
+  return {-0.0193 * t - 0.2592, -0.0665 * t + 0.0008, -0.0004 * t + 0.2125, -0.0641 * t - 0.8989,
+          -0.0033 * t + 0.0452};
+}
+PerezCoefficients perez_y(double t) {
+  return {-0.0167 * t - 0.2608, -0.0950 * t + 0.0092, -0.0079 * t + 0.2102, -0.0441 * t - 1.6537,
+          -0.0109 * t + 0.0529};
+}
+
+/// NOTE: the Perez et al. (1993) sky distribution used by Preetham (sec. 3):
+/// F(theta, gamma) = (1 + A exp(B / cos theta)) (1 + C exp(D gamma) + E cos^2 gamma), theta the
+/// view direction's zenith angle, gamma its angle to the sun. B < 0 for T >= 1.7, so the
+/// first factor tends to 1 at the horizon (cos theta -> +0).
+double perez(const PerezCoefficients& k, double cos_theta, double gamma) {
+  double cg = std::cos(gamma);
+  return (1.0 + k.a * std::exp(k.b / cos_theta)) * (1.0 + k.c * std::exp(k.d * gamma) + k.e * cg * cg);
+}
+
+/// NOTE: zenith luminance in kcd/m^2, Preetham appendix A.2:
+/// Y_z = (4.0453 T - 4.9710) tan(chi) - 0.2155 T + 2.4192, chi = (4/9 - T/120)(pi - 2 theta_s).
+double zenith_luminance(double t, double theta_s) {
+  double chi = (4.0 / 9.0 - t / 120.0) * (k_pi_d - 2.0 * theta_s);
+  return (4.0453 * t - 4.9710) * std::tan(chi) - 0.2155 * t + 2.4192;
+}
+
+/// NOTE: zenith chromaticity, Preetham appendix A.2: x_z, y_z = [T^2 T 1] M [theta_s^3 theta_s^2 theta_s 1]^T.
+double zenith_chromaticity(const double m[3][4], double t, double theta_s) {
+  double th[4] = {theta_s * theta_s * theta_s, theta_s * theta_s, theta_s, 1.0};
+  double tt[3] = {t * t, t, 1.0};
+  double s = 0.0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) s += tt[i] * m[i][j] * th[j];
+  return s;
+}
+const double k_zenith_x[3][4] = {{0.00166, -0.00375, 0.00209, 0.0},
+                                 {-0.02903, 0.06377, -0.03202, 0.00394},
+                                 {0.11693, -0.21196, 0.06052, 0.25886}};
+const double k_zenith_y[3][4] = {{0.00275, -0.00610, 0.00317, 0.0},
+                                 {-0.04214, 0.08970, -0.04153, 0.00516},
+                                 {0.15346, -0.26756, 0.06670, 0.26688}};
+
+/// CIE XYZ -> linear sRGB (Rec. 709 primaries, D65 white), negative components clamped.
+/// NOTE: matrix of IEC 61966-2-1:1999 to 7 digits as tabulated by B. Lindbloom
+/// ("RGB/XYZ Matrices", brucelindbloom.com); its inverse's Y row is the Rec. 709 luminance
+/// (0.2126, 0.7152, 0.0722), so luminance(rgb) = Y for in-gamut colours.
+Color xyz_to_linear_srgb(double x, double y, double z) {
+  double r = 3.2404542 * x - 1.5371385 * y - 0.4985314 * z;
+  double g = -0.9692660 * x + 1.8760108 * y + 0.0415560 * z;
+  double b = 0.0556434 * x - 0.2040259 * y + 1.0572252 * z;
+  return Color(float(std::max(r, 0.0)), float(std::max(g, 0.0)), float(std::max(b, 0.0)));
+}
+
+/// CIE xyY -> XYZ: X = x Y / y, Z = (1 - x - y) Y / y.
+Color xyY_to_linear_srgb(double x, double y, double big_y) {
+  if (!(y > 0.0) || !(big_y > 0.0)) return Color(0.f);
+  return xyz_to_linear_srgb(x * big_y / y, big_y, (1.0 - x - y) * big_y / y);
+}
+
+// ---- The sun: Preetham appendix A.1, data as in Mitsuba 0.5's sunsky plugin, from
+// M. Iqbal, "An Introduction to Solar Radiation", Academic Press 1983 (absorption
+// coefficients: ozone p. 127, mixed gases and water vapour p. 130).
+
+/// Extraterrestrial solar spectral radiance, W/(m^2 sr nm), 380..750 nm every 10 nm.
+const double k_sol_amplitudes[38] = {
+    16559.0, 16233.7, 21127.5, 25888.2, 25829.1, 24232.3, 26760.5, 29658.3, 30545.4, 30057.5,
+    30663.7, 28830.4, 28712.1, 27825.0, 27100.6, 27233.6, 26361.3, 25503.8, 25060.2, 25311.6,
+    25355.9, 25134.2, 24631.5, 24173.2, 23685.3, 23212.1, 22827.7, 22339.8, 21970.2, 21526.7,
+    21097.9, 20728.3, 20240.4, 19870.8, 19427.2, 19072.4, 18628.9, 18259.2};
+/// Ozone absorption coefficient k_o, 1/cm.
+const double k_o_wavelengths[64] = {300, 305, 310, 315, 320, 325, 330, 335, 340, 345, 350, 355, 445,
+                                    450, 455, 460, 465, 470, 475, 480, 485, 490, 495, 500, 505, 510,
+                                    515, 520, 525, 530, 535, 540, 545, 550, 555, 560, 565, 570, 575,
+                                    580, 585, 590, 595, 600, 605, 610, 620, 630, 640, 650, 660, 670,
+                                    680, 690, 700, 710, 720, 730, 740, 750, 760, 770, 780, 790};
+const double k_o_amplitudes[64] = {10.0,  4.8,   2.7,   1.35,  .8,    .380,  .160,  .075,  .04,   .019,  .007,
+                                   .0,    .003,  .003,  .004,  .006,  .008,  .009,  .012,  .014,  .017,  .021,
+                                   .025,  .03,   .035,  .04,   .045,  .048,  .057,  .063,  .07,   .075,  .08,
+                                   .085,  .095,  .103,  .110,  .12,   .122,  .12,   .118,  .115,  .12,   .125,
+                                   .130,  .12,   .105,  .09,   .079,  .067,  .057,  .048,  .036,  .028,  .023,
+                                   .018,  .014,  .011,  .010,  .009,  .007,  .004,  .0,    .0};
+/// Mixed-gas absorption coefficient k_g, 1/km.
+const double k_g_wavelengths[4] = {759, 760, 770, 771};
+const double k_g_amplitudes[4] = {0.0, 3.0, 0.210, 0.0};
+/// Water-vapour absorption coefficient k_wa, 1/cm.
+const double k_wa_wavelengths[13] = {689, 690, 700, 710, 720, 730, 740, 750, 760, 770, 780, 790, 800};
+const double k_wa_amplitudes[13] = {0,     0.160e-1, 0.240e-1, 0.125e-1, 0.100e+1, 0.870, 0.610e-1,
+                                    0.100e-2, 0.100e-4, 0.100e-4, 0.600e-3, 0.175e-1, 0.360e-1};
+
+/// Piecewise-linear table lookup, 0 outside the table.
+double interpolate(const double* wl, const double* val, int n, double lambda) {
+  if (lambda < wl[0] || lambda > wl[n - 1]) return 0.0;
+  for (int i = 0; i + 1 < n; ++i)
+    if (lambda <= wl[i + 1]) {
+      double t = (lambda - wl[i]) / (wl[i + 1] - wl[i]);
+      return val[i] * (1.0 - t) + val[i + 1] * t;
+    }
+  return val[n - 1];
+}
+
+/// NOTE: CIE 1931 colour matching functions by the multi-lobe Gaussian fit of C. Wyman,
+/// P.-P. Sloan, P. Shirley, "Simple Analytic Approximations to the CIE XYZ Color Matching
+/// Functions", JCGT 2(2), 2013, eq. 2 (error well below the 10 nm sampling of the data).
+double lobe(double lambda, double mu, double s1, double s2) {
+  double t = (lambda - mu) / (lambda < mu ? s1 : s2);
+  return std::exp(-0.5 * t * t);
+}
+void cie_xyz_bar(double l, double* x, double* y, double* z) {
+  *x = 1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7) - 0.065 * lobe(l, 501.1, 20.4, 26.2);
+  *y = 0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1);
+  *z = 1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8);
+}
+
+/// Radiance of the sun's disc (linear sRGB, W/(m^2 sr), luminance = cd/m^2 / 683) for the
+/// sun's zenith angle theta_s and turbidity t.
+/// NOTE: Preetham appendix A.1: the solar spectrum times the transmittances of Rayleigh
+/// scattering exp(-0.008735 lambda^-4.08 m), aerosols (Angstrom) exp(-beta lambda^-alpha m)
+/// with alpha = 1.3, beta = 0.04608365822050 T - 0.04586025928522, ozone (l = 0.35 cm),
+/// mixed gases and water vapour (w = 2 cm), lambda in micrometres; relative optical mass
+/// m = 1 / (cos theta_s + 0.15 (93.885 - theta_s[deg])^-1.253) (Kasten 1966). Integrated
+/// against the CIE functions from 380 to 750 nm (trapezoid rule, 1 nm steps).
+Color preetham_sun_radiance(double theta_s, double t) {
+  double beta = 0.04608365822050 * t - 0.04586025928522;
+  double theta_deg = theta_s * 180.0 / k_pi_d;
+  double m = 1.0 / (std::cos(theta_s) + 0.15 * std::pow(93.885 - theta_deg, -1.253));
+  double acc[3] = {0, 0, 0};
+  for (int l = 380; l <= 750; ++l) {
+    double lambda = l, um = lambda / 1000.0;
+    double tau_r = std::exp(-m * 0.008735 * std::pow(um, -4.08));
+    double tau_a = std::exp(-m * beta * std::pow(um, -1.3));
+    double tau_o = std::exp(-m * interpolate(k_o_wavelengths, k_o_amplitudes, 64, lambda) * 0.35);
+    double kg = interpolate(k_g_wavelengths, k_g_amplitudes, 4, lambda);
+    double tau_g = std::exp(-1.41 * kg * m / std::pow(1.0 + 118.93 * kg * m, 0.45));
+    double kwa = interpolate(k_wa_wavelengths, k_wa_amplitudes, 13, lambda);
+    double tau_wa = std::exp(-0.2385 * kwa * 2.0 * m / std::pow(1.0 + 20.07 * kwa * 2.0 * m, 0.45));
+    int i = std::min((l - 380) / 10, 36);
+    double frac = (lambda - 380.0 - 10.0 * i) / 10.0;
+    double sol = k_sol_amplitudes[i] * (1.0 - frac) + k_sol_amplitudes[i + 1] * frac;
+    double spectral = sol * tau_r * tau_a * tau_o * tau_g * tau_wa;
+    double w = (l == 380 || l == 750) ? 0.5 : 1.0;
+    double xb, yb, zb;
+    cie_xyz_bar(lambda, &xb, &yb, &zb);
+    acc[0] += w * spectral * xb;
+    acc[1] += w * spectral * yb;
+    acc[2] += w * spectral * zb;
+  }
+  return xyz_to_linear_srgb(acc[0], acc[1], acc[2]);
+}
+
+}  // namespace
+
+class SkyLight final : public Light {
+ public:
+  SkyLight(double elevation_deg, double azimuth_deg, double turbidity, float strength, const Color& ground_albedo,
+           bool sun, bool visible)
+      : m_visible(visible) {
+    double el = elevation_deg * k_pi_d / 180.0, az = azimuth_deg * k_pi_d / 180.0;
+    m_sun_dir_d[0] = std::cos(el) * std::sin(az);
+    m_sun_dir_d[1] = std::sin(el);
+    m_sun_dir_d[2] = -std::cos(el) * std::cos(az);
+    double theta_s = k_pi_d / 2.0 - el;
+    m_coef[0] = perez_Y(turbidity);
+    m_coef[1] = perez_x(turbidity);
+    m_coef[2] = perez_y(turbidity);
+    // Zenith values Y_z (kcd/m^2), x_z, y_z; the sky is zenith value x F(theta, gamma) / F(0, theta_s).
+    double zenith[3] = {zenith_luminance(turbidity, theta_s), zenith_chromaticity(k_zenith_x, turbidity, theta_s),
+                        zenith_chromaticity(k_zenith_y, turbidity, theta_s)};
+    for (int k = 0; k < 3; ++k) m_zenith_over_f0[k] = zenith[k] / perez(m_coef[k], 1.0, theta_s);
+    // kcd/m^2 -> cd/m^2 -> W/(m^2 sr) (luminance / 683).
+    m_scale = double(strength) * 1000.0 / k_lm_per_w;
+
+    // The sun disc, through the "sun" plugin: irradiance = radiance x pi sin^2(half-angle).
+    Color sun_irradiance(0.f);
+    if (sun) {
+      Color l_sun = preetham_sun_radiance(theta_s, turbidity) * strength;
+      double half = 0.5 * k_sun_diameter_deg * k_pi_d / 180.0;
+      sun_irradiance = l_sun * float(k_pi_d * std::sin(half) * std::sin(half));
+      ParamSet p;
+      p.set("direction", std::vector<double>{m_sun_dir_d[0], m_sun_dir_d[1], m_sun_dir_d[2]});
+      p.set("irradiance", std::vector<double>{sun_irradiance.x, sun_irradiance.y, sun_irradiance.z});
+      p.set("angular_diameter", k_sun_diameter_deg);
+      m_sun = create_sun_light(p);
+    }
+
+    // Ground: albedo x horizontal irradiance of sky and sun / pi (midpoint rule in
+    // (cos theta, phi) over the upper hemisphere, 256 x 512 cells).
+    double e_h[3] = {0, 0, 0};
+    const int nz = 256, nphi = 512;
+    for (int i = 0; i < nz; ++i) {
+      double cos_t = (i + 0.5) / nz, sin_t = std::sqrt(1.0 - cos_t * cos_t);
+      for (int j = 0; j < nphi; ++j) {
+        double phi = 2.0 * k_pi_d * (j + 0.5) / nphi;
+        Color l = sky_radiance_d(sin_t * std::sin(phi), cos_t, -sin_t * std::cos(phi));
+        for (int k = 0; k < 3; ++k) e_h[k] += double(l[k]) * cos_t;
+      }
+    }
+    for (int k = 0; k < 3; ++k)
+      e_h[k] = e_h[k] * (2.0 * k_pi_d / (double(nz) * nphi)) + double(sun_irradiance[k]) * std::sin(el);
+    m_ground = Color(float(e_h[0] / k_pi_d), float(e_h[1] / k_pi_d), float(e_h[2] / k_pi_d)) * ground_albedo;
+
+    // Sampling table: luminance at the pixel centres.
+    std::vector<float> lum(size_t(k_table_width) * k_table_height);
+    for (int y = 0; y < k_table_height; ++y)
+      for (int x = 0; x < k_table_width; ++x)
+        lum[size_t(y) * k_table_width + x] =
+            luminance(sky_radiance(equirect_direction(Vec2f((x + 0.5f) / k_table_width, (y + 0.5f) / k_table_height))));
+    m_sampler = EquirectSampler(lum, k_table_width, k_table_height);
+
+    // NOTE: a one-sample mixture of the two strategies (Veach 1997, sec. 9.2.4, with the
+    // balance heuristic: the density is the mixture density), sun vs sky table in proportion
+    // to their power (disc irradiance vs 4 pi x mean sky luminance), kept within [0.1, 0.9]
+    // so that neither strategy starves.
+    m_sky_power = 4.f * k_pi * m_sampler.mean();
+    m_sun_power = luminance(sun_irradiance);
+    if (m_sun) {
+      float total = m_sky_power + m_sun_power;
+      m_sun_prob = total > 0.f ? std::min(0.9f, std::max(0.1f, m_sun_power / total)) : 0.5f;
+    }
+  }
+
+  bool sample(const LightSampleContext& ctx, const Vec2f& u, LightSample* out) const override {
+    Vec3f wi;
+    if (m_sun && u.x < m_sun_prob) {
+      LightSample ls;
+      if (!m_sun->sample(ctx, Vec2f(std::min(u.x / m_sun_prob, k_one_minus_epsilon), u.y), &ls)) return false;
+      wi = ls.wi;
+    } else {
+      float ux = m_sun ? std::min((u.x - m_sun_prob) / (1.f - m_sun_prob), k_one_minus_epsilon) : u.x;
+      wi = normalize(m_sampler.sample(Vec2f(ux, u.y)));
+    }
+    // Radiance and density of the direction itself (one-sample mixture), exactly as le()
+    // and pdf_le() report them.
+    float pdf = pdf_le(wi);
+    if (!(pdf > 0.f)) return false;
+    out->wi = wi;
+    out->li = le(wi);
+    out->pdf = pdf;
+    out->delta = false;
+    out->infinite = true;
+    out->p_light_error = Vec3f(0.f);
+    out->n_light = Vec3f(0.f);
+    return true;
+  }
+  /// NOTE: as "environment" and "sun": pi r^2 x (4 pi x mean sky luminance + sun irradiance).
+  float power() const override { return k_pi * m_radius * m_radius * (m_sky_power + m_sun_power); }
+  bool is_infinite() const override { return true; }
+  bool visible_to_camera() const override { return m_visible; }
+  Color le(const Vec3f& dir) const override {
+    Color l = sky_radiance(dir);
+    if (m_sun) l += m_sun->le(dir);
+    return l;
+  }
+  float pdf_le(const Vec3f& dir) const override {
+    float p = m_sampler.pdf(dir);
+    if (!m_sun) return p;
+    return (1.f - m_sun_prob) * p + m_sun_prob * m_sun->pdf_le(dir);
+  }
+  void preprocess(const Bounds3& b) override { m_radius = std::max(b.radius(), 1e-3f); }
+
+ private:
+  /// Sky (above the horizon) or ground (below) radiance along the unit direction d.
+  Color sky_radiance(const Vec3f& d) const { return sky_radiance_d(d.x, d.y, d.z); }
+  Color sky_radiance_d(double dx, double dy, double dz) const {
+    if (!(dy > 0.0)) return m_ground;
+    double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    dx /= len, dy /= len, dz /= len;
+    // Angle to the sun from atan2(|d x s|, d . s): accurate also near the sun.
+    const double* s = m_sun_dir_d;
+    double cx = dy * s[2] - dz * s[1], cy = dz * s[0] - dx * s[2], cz = dx * s[1] - dy * s[0];
+    double gamma = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dx * s[0] + dy * s[1] + dz * s[2]);
+    double v[3];
+    for (int k = 0; k < 3; ++k) v[k] = m_zenith_over_f0[k] * perez(m_coef[k], dy, gamma);
+    return xyY_to_linear_srgb(v[1], v[2], v[0] * m_scale);
+  }
+
+  double m_sun_dir_d[3];
+  PerezCoefficients m_coef[3];  // Y, x, y
+  double m_zenith_over_f0[3];   // zenith value / F(0, theta_s) for Y, x, y
+  double m_scale;               // kcd/m^2 -> renderer units, times strength
+  Color m_ground;
+  std::shared_ptr<Light> m_sun;
+  float m_sun_prob = 0.f;
+  EquirectSampler m_sampler;
+  float m_sky_power = 0.f, m_sun_power = 0.f;
+  float m_radius = 1.f;
+  bool m_visible;
+};
+
+std::shared_ptr<Light> create_sky_light(const ParamSet& params) {
+  float elevation = params.get_float("elevation", 45.f);
+  float azimuth = params.get_float("azimuth", 0.f);
+  float turbidity = params.get_float("turbidity", 3.f);
+  float strength = params.get_float("strength", 1.f);
+  Color albedo = params.get_color("ground_albedo", Color(0.2f));
+  bool sun = params.get_bool("sun", true);
+  bool visible = params.get_bool("visible", true);
+  if (!(elevation >= 0.f && elevation <= 90.f))
+    throw Error("parameter 'elevation': must lie in [0, 90] degrees, got " + std::to_string(elevation));
+  if (!std::isfinite(azimuth)) throw Error("parameter 'azimuth': must be a finite angle in degrees");
+  if (!(turbidity >= 1.7f && turbidity <= 10.f))
+    throw Error("parameter 'turbidity': must lie in [1.7, 10], got " + std::to_string(turbidity));
+  if (!(strength >= 0.f) || !std::isfinite(strength))
+    throw Error("parameter 'strength': must be a finite number >= 0, got " + std::to_string(strength));
+  for (int k = 0; k < 3; ++k)
+    if (!(albedo[k] >= 0.f && albedo[k] <= 1.f))
+      throw Error("parameter 'ground_albedo': components must lie in [0, 1]");
+  return std::make_shared<SkyLight>(elevation, azimuth, turbidity, strength, albedo, sun, visible);
+}
+
+}  // namespace sg

@@ -1,0 +1,85 @@
+// Light "spot": a point light at `position` emitting into a cone around `direction`.
+//
+// Parameters:
+//   position       (0, 0, 0)
+//   direction      axis the light shines along, non-zero (0, -1, 0): downwards in a y-up world
+//   intensity      W/sr per channel on the axis, >= 0 (1)
+//   strength       scale of the intensity, >= 0 (1)
+//   cone_angle     degrees from the axis where the falloff ends (no light beyond), in (0, 180] (30)
+//   falloff_start  degrees from the axis where the falloff begins (full intensity inside), in
+//                  [0, cone_angle] (25); equal to cone_angle gives a hard edge
+// Both angles are half-angles measured from the axis (as pbrt-v4's coneangle).
+#include <cmath>
+
+#include "light/light_registry.h"
+
+namespace sg {
+
+class SpotLight final : public Light {
+ public:
+  SpotLight(const Vec3f& pos, const Vec3f& dir, const Color& intensity, float cone_deg, float start_deg)
+      : m_pos(pos), m_axis(normalize(dir)), m_intensity(intensity) {
+    m_cos_end = std::cos(cone_deg * k_pi / 180.f);
+    m_cos_start = std::cos(start_deg * k_pi / 180.f);
+  }
+  bool sample(const LightSampleContext& ctx, const Vec2f&, LightSample* out) const override {
+    Vec3f d = m_pos - ctx.p;
+    float dist2 = length_squared(d);
+    if (!(dist2 > 0.f)) return false;
+    Vec3f wi = d / std::sqrt(dist2);
+    float falloff = this->falloff(-dot(wi, m_axis));
+    if (falloff == 0.f) return false;
+    out->wi = wi;
+    out->li = m_intensity * (falloff / dist2);
+    out->pdf = 1.f;
+    out->p_light = m_pos;
+    out->p_light_error = Vec3f(0.f);
+    out->n_light = Vec3f(0.f);
+    out->delta = true;
+    out->infinite = false;
+    return true;
+  }
+  /// NOTE: pbrt-v4 SpotLight::Phi: the smoothstep in cos(theta) integrates to half the
+  /// falloff band, so Phi = I 2 pi (1 - (cos_start + cos_end) / 2).
+  float power() const override {
+    return luminance(m_intensity) * 2.f * k_pi * (1.f - 0.5f * (m_cos_start + m_cos_end));
+  }
+  bool is_delta() const override { return true; }
+
+  /// Fraction of the axial intensity emitted at cos(theta) from the axis.
+  /// NOTE: pbrt-v4 SpotLight::I: SmoothStep(cos_end, cos_start, cos theta), with
+  /// smoothstep(t) = t^2 (3 - 2 t) and a step when the two angles coincide.
+  float falloff(float cos_theta) const {
+    if (m_cos_start <= m_cos_end) return cos_theta >= m_cos_end ? 1.f : 0.f;
+    float t = std::min(1.f, std::max(0.f, (cos_theta - m_cos_end) / (m_cos_start - m_cos_end)));
+    return t * t * (3.f - 2.f * t);
+  }
+
+ private:
+  Vec3f m_pos, m_axis;
+  Color m_intensity;
+  float m_cos_end, m_cos_start;
+};
+
+std::shared_ptr<Light> create_spot_light(const ParamSet& params) {
+  Vec3f pos = params.get_vec3("position", Vec3f(0.f));
+  Vec3f dir = params.get_vec3("direction", Vec3f(0.f, -1.f, 0.f));
+  Color intensity = params.get_color("intensity", Color(1.f));
+  float strength = params.get_float("strength", 1.f);
+  float cone = params.get_float("cone_angle", 30.f);
+  float start = params.get_float("falloff_start", std::min(25.f, cone));
+  if (!is_finite(pos)) throw Error("parameter 'position': must be finite");
+  if (!is_finite(dir) || !(length(dir) > 0.f)) throw Error("parameter 'direction': must be a finite non-zero vector");
+  if (!is_finite(intensity) || intensity.x < 0 || intensity.y < 0 || intensity.z < 0)
+    throw Error("parameter 'intensity': components must be finite and >= 0");
+  if (!(strength >= 0.f) || !std::isfinite(strength))
+    throw Error("parameter 'strength': must be a finite number >= 0, got " + std::to_string(strength));
+  if (!(cone > 0.f && cone <= 180.f))
+    throw Error("parameter 'cone_angle': must lie in (0, 180] degrees, got " + std::to_string(cone));
+  if (!(start >= 0.f && start <= cone))
+    throw Error("parameter 'falloff_start': must lie in [0, cone_angle] = [0, " + std::to_string(cone) +
+                "] degrees, got " + std::to_string(start));
+  return std::make_shared<SpotLight>(pos, dir, intensity * strength, cone, start);
+}
+
+}  // namespace sg

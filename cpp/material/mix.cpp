@@ -1,0 +1,157 @@
+// Material "mix": the linear blend (1 - w) A + w B of two existing materials, given by id
+// (`material_a`, `material_b`). The weight w (the fraction of B) is a constant `weight`
+// in [0, 1] or, when `weight` is a texture reference, a mask: the mask value is the
+// texture's first (red) channel at the hit (eval_texture: si.uv filtered over the ray
+// footprint), clamped to [0, 1]. The first
+// channel rather than the luminance, so that a grey mask image reads back its stored value
+// exactly and a mask can be packed into one channel of an RGB texture.
+//
+//   eval = (1 - w) eval_A + w eval_B,  pdf = (1 - w) pdf_A + w pdf_B,
+//   emission = (1 - w) emission_A + w emission_B,  albedo = (1 - w) albedo_A + w albedo_B.
+//
+// sample() picks B with probability w using u_lobe, and reuses u_lobe, rescaled to [0, 1),
+// for the component's own lobe choice. A non-delta sample returns
+// eval_mix / pdf_mix (one-sample MIS over the components with the balance heuristic,
+// Veach 1997, sec. 9.2.4): pdf_mix is the exact density of the non-delta directions the
+// mix generates, since each component's pdf() is the density of its own non-delta samples.
+// A delta sample of the chosen component keeps its weight (mass / probability of the
+// component's delta event) and its pdf is multiplied by the component's selection
+// probability: the delta event's mass in the mix is w_c * mass and its probability w_c * p.
+// Where w is exactly 0 or 1 the mix forwards every call to the single component, so a
+// mask that is mostly 0 or 1 (wear, rust patches) costs what the component costs.
+//
+// Materials are looked up when the mix is created (MaterialContext::materials): the mix
+// holds the component objects, so ids must exist before the mix (no cycles are possible).
+#include "core/error.h"
+#include "material/material_registry.h"
+
+namespace sg {
+
+namespace {
+
+class MixMaterial final : public Material {
+ public:
+  MixMaterial(std::shared_ptr<Material> a, std::shared_ptr<Material> b, float weight,
+              std::shared_ptr<Texture> mask)
+      : m_a(std::move(a)), m_b(std::move(b)), m_weight(weight), m_mask(std::move(mask)) {
+    m_flags = m_a->flags() | m_b->flags();
+    m_emissive = m_a->is_emissive() || m_b->is_emissive();
+    m_mean_weight = m_mask ? clamp01(m_mask->average().x) : m_weight;
+  }
+
+  Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
+    float w = weight(si);
+    if (w <= 0.f) return m_a->eval(si, wo, wi);
+    if (w >= 1.f) return m_b->eval(si, wo, wi);
+    return m_a->eval(si, wo, wi) * (1.f - w) + m_b->eval(si, wo, wi) * w;
+  }
+
+  float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
+    float w = weight(si);
+    if (w <= 0.f) return m_a->pdf(si, wo, wi);
+    if (w >= 1.f) return m_b->pdf(si, wo, wi);
+    return m_a->pdf(si, wo, wi) * (1.f - w) + m_b->pdf(si, wo, wi) * w;
+  }
+
+  bool sample(const SurfaceInteraction& si, const Vec3f& wo, float u_lobe, const Vec2f& u,
+              BsdfSample* out) const override {
+    float w = weight(si);
+    if (w <= 0.f) return m_a->sample(si, wo, u_lobe, u, out);
+    if (w >= 1.f) return m_b->sample(si, wo, u_lobe, u, out);
+    bool pick_b = u_lobe < w;
+    const Material* chosen = pick_b ? m_b.get() : m_a.get();
+    const Material* other = pick_b ? m_a.get() : m_b.get();
+    float w_chosen = pick_b ? w : 1.f - w, w_other = 1.f - w_chosen;
+    // NOTE: reuse of the selection sample: u_lobe rescaled within the chosen interval is
+    // again uniform on [0, 1) (as pbrt-v4's SampleDiscrete returns uRemapped,
+    // src/pbrt/util/sampling.h), clamped below 1 against rounding.
+    float u_rest = pick_b ? u_lobe / w : (u_lobe - w) / (1.f - w);
+    u_rest = std::min(std::max(u_rest, 0.f), k_one_minus_epsilon);
+    if (!chosen->sample(si, wo, u_rest, u, out)) return false;
+    if (out->flags & k_bsdf_delta) {
+      out->pdf *= w_chosen;
+      return true;
+    }
+    // The chosen component's eval and pdf are weight * pdf and pdf (sample() returns
+    // weight = eval / pdf), so only the other component is evaluated.
+    Color f = out->weight * (out->pdf * w_chosen) + other->eval(si, wo, out->wi) * w_other;
+    float pdf = out->pdf * w_chosen + other->pdf(si, wo, out->wi) * w_other;
+    if (!(pdf > 0.f)) return false;
+    out->weight = f / pdf;
+    out->pdf = pdf;
+    return true;
+  }
+
+  Color albedo(const SurfaceInteraction& si) const override {
+    float w = weight(si);
+    if (w <= 0.f) return m_a->albedo(si);
+    if (w >= 1.f) return m_b->albedo(si);
+    return m_a->albedo(si) * (1.f - w) + m_b->albedo(si) * w;
+  }
+
+  uint32_t flags() const override { return m_flags; }
+
+  Color emission(const SurfaceInteraction& si, const Vec3f& wo) const override {
+    if (!m_emissive) return Color(0.f);
+    float w = weight(si);
+    Color e(0.f);
+    if (w < 1.f && m_a->is_emissive()) e += m_a->emission(si, wo) * (1.f - w);
+    if (w > 0.f && m_b->is_emissive()) e += m_b->emission(si, wo) * w;
+    return e;
+  }
+  bool is_emissive() const override { return m_emissive; }
+  /// Mean emission for light power estimates, with the mean mask value.
+  Color average_emission() const override {
+    return m_a->average_emission() * (1.f - m_mean_weight) + m_b->average_emission() * m_mean_weight;
+  }
+  bool two_sided_emission() const override {
+    return (m_a->is_emissive() && m_a->two_sided_emission()) || (m_b->is_emissive() && m_b->two_sided_emission());
+  }
+
+ private:
+  static float clamp01(float x) { return std::min(std::max(x, 0.f), 1.f); }
+  float weight(const SurfaceInteraction& si) const {
+    return m_mask ? clamp01(eval_texture(*m_mask, si).x) : m_weight;
+  }
+
+  std::shared_ptr<Material> m_a, m_b;
+  float m_weight;
+  std::shared_ptr<Texture> m_mask;
+  float m_mean_weight;
+  uint32_t m_flags;
+  bool m_emissive;
+};
+
+std::shared_ptr<Material> get_component(const ParamSet& params, const std::string& name,
+                                        const MaterialContext& ctx) {
+  if (!params.has(name)) throw Error("parameter '" + name + "' is required: the id of an existing material");
+  int64_t id = params.get_int(name, -1);
+  std::shared_ptr<Material> m;
+  if (id >= 0 && id <= int64_t(UINT32_MAX) && ctx.materials) m = ctx.materials(uint32_t(id));
+  if (!m)
+    throw Error("parameter '" + name + "': material " + std::to_string(id) +
+                " does not exist (must be the id of an existing material)");
+  return m;
+}
+
+}  // namespace
+
+std::shared_ptr<Material> create_mix_material(const ParamSet& params, const MaterialContext& ctx) {
+  auto a = get_component(params, "material_a", ctx);
+  auto b = get_component(params, "material_b", ctx);
+  TextureRef ref;
+  std::shared_ptr<Texture> mask;
+  float weight = 0.5f;
+  if (params.get_texture("weight", &ref)) {
+    mask = ctx.textures ? ctx.textures(ref.id) : nullptr;
+    if (!mask) throw Error("parameter 'weight': texture " + std::to_string(ref.id) + " does not exist");
+  } else {
+    weight = params.get_float("weight", 0.5f);
+    if (!(weight >= 0.f && weight <= 1.f))
+      throw Error("parameter 'weight': must lie in [0, 1] (the fraction of material_b) or be a texture, got " +
+                  std::to_string(weight));
+  }
+  return std::make_shared<MixMaterial>(std::move(a), std::move(b), weight, std::move(mask));
+}
+
+}  // namespace sg

@@ -1,0 +1,204 @@
+#include "texture/mipmap.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace sg {
+
+WrapMode parse_wrap_mode(const std::string& s, const std::string& context) {
+  if (s == "repeat") return WrapMode::Repeat;
+  if (s == "clamp") return WrapMode::Clamp;
+  if (s == "mirror") return WrapMode::Mirror;
+  throw Error(context + ": 'wrap' must be repeat, clamp or mirror, got '" + s + "'");
+}
+
+namespace {
+
+struct Tap {
+  int index;
+  float weight;
+};
+
+/// Filter taps reducing n texels to m along one axis.
+/// NOTE: exact area-weighted box filter: output texel i covers the input interval
+/// [i n/m, (i+1) n/m) and averages the input texels by their overlap with it. For n = 2m
+/// this is the usual 2-tap box; for odd n = 2m+1 it is the 3-tap polyphase box filter of
+/// Guthe & Heckbert, "Non-Power-of-Two Mipmap Creation" (NVIDIA TR-01838-001, 2003),
+/// weights ((m-i), m, (i+1)) / (2m+1). The intervals partition [0, n), so the mean is
+/// preserved exactly and no texel outside the image is needed (any wrap mode).
+std::vector<std::vector<Tap>> box_taps(int n, int m) {
+  std::vector<std::vector<Tap>> taps(static_cast<size_t>(m));
+  const double scale = double(n) / double(m);
+  for (int i = 0; i < m; ++i) {
+    double a = i * scale, b = (i + 1) * scale;
+    int j0 = std::max(0, int(std::floor(a))), j1 = std::min(n, int(std::ceil(b)));
+    for (int j = j0; j < j1; ++j) {
+      double overlap = std::min(b, j + 1.0) - std::max(a, double(j));
+      if (overlap > 1e-9) taps[size_t(i)].push_back({j, float(overlap / scale)});
+    }
+  }
+  return taps;
+}
+
+inline int wrap_index(int i, int n, WrapMode wrap) {
+  if (i >= 0 && i < n) return i;  // the common case, without divisions
+  switch (wrap) {
+    case WrapMode::Clamp: return std::min(std::max(i, 0), n - 1);
+    case WrapMode::Mirror: {
+      int period = 2 * n;
+      int m = ((i % period) + period) % period;
+      return m < n ? m : period - 1 - m;
+    }
+    default: return ((i % n) + n) % n;
+  }
+}
+
+/// Brings an image coordinate into a small range with the same wrapped value, so that
+/// texel indices never overflow an int (uvs of tiled meshes can be large).
+inline float reduce_coordinate(float s, WrapMode wrap) {
+  if (!std::isfinite(s)) return 0.f;
+  switch (wrap) {
+    case WrapMode::Clamp: return std::min(std::max(s, -1.f), 2.f);
+    case WrapMode::Mirror: return s - 2.f * std::floor(0.5f * s);  // period 2
+    default: return s - std::floor(s);                               // period 1
+  }
+}
+
+}  // namespace
+
+MipMap::MipMap(const ImageData& image) {
+  if (image.width <= 0 || image.height <= 0 || image.channels <= 0 ||
+      image.pixels.size() < size_t(image.width) * image.height * image.channels)
+    throw Error("image texture: the image has no pixels");
+  m_channels = image.channels >= 3 ? 3 : 1;
+  Level base;
+  base.width = image.width;
+  base.height = image.height;
+  const size_t n = size_t(image.width) * image.height;
+  base.data.resize(n * m_channels);
+  double acc[3] = {0, 0, 0};
+  for (size_t i = 0; i < n; ++i)
+    for (int c = 0; c < m_channels; ++c) {
+      float v = image.pixels[i * image.channels + c];
+      base.data[i * m_channels + c] = v;
+      acc[c] += v;
+    }
+  if (m_channels == 1) m_average = Color(float(acc[0] / n));
+  else m_average = Color(float(acc[0] / n), float(acc[1] / n), float(acc[2] / n));
+  m_levels.push_back(std::move(base));
+
+  // Levels halve each dimension (rounding down, at least 1) until 1 x 1, the OpenGL rule.
+  const int nc = m_channels;
+  while (m_levels.back().width > 1 || m_levels.back().height > 1) {
+    const Level& src = m_levels.back();
+    Level dst;
+    dst.width = std::max(1, src.width / 2);
+    dst.height = std::max(1, src.height / 2);
+    auto tx = box_taps(src.width, dst.width), ty = box_taps(src.height, dst.height);
+    // Separable: rows first (src.height x dst.width), then columns.
+    std::vector<float> tmp(size_t(src.height) * dst.width * nc, 0.f);
+    for (int y = 0; y < src.height; ++y)
+      for (int x = 0; x < dst.width; ++x)
+        for (const Tap& t : tx[size_t(x)])
+          for (int c = 0; c < nc; ++c)
+            tmp[(size_t(y) * dst.width + x) * nc + c] += t.weight * src.data[(size_t(y) * src.width + t.index) * nc + c];
+    dst.data.assign(size_t(dst.height) * dst.width * nc, 0.f);
+    for (int y = 0; y < dst.height; ++y)
+      for (const Tap& t : ty[size_t(y)])
+        for (int x = 0; x < dst.width; ++x)
+          for (int c = 0; c < nc; ++c)
+            dst.data[(size_t(y) * dst.width + x) * nc + c] += t.weight * tmp[(size_t(t.index) * dst.width + x) * nc + c];
+    m_levels.push_back(std::move(dst));
+  }
+}
+
+Color MipMap::texel(int level, int x, int y, WrapMode wrap) const {
+  const Level& l = m_levels[size_t(level)];
+  size_t i = size_t(wrap_index(y, l.height, wrap)) * l.width + size_t(wrap_index(x, l.width, wrap));
+  if (m_channels == 1) return Color(l.data[i]);
+  const float* p = &l.data[3 * i];
+  return Color(p[0], p[1], p[2]);
+}
+
+Color MipMap::bilinear(int level, float s, float t, WrapMode wrap) const {
+  const Level& l = m_levels[size_t(level)];
+  float x = reduce_coordinate(s, wrap) * float(l.width) - 0.5f;
+  float y = reduce_coordinate(t, wrap) * float(l.height) - 0.5f;
+  float fx = std::floor(x), fy = std::floor(y);
+  float ax = x - fx, ay = y - fy;
+  int x0 = int(fx), y0 = int(fy);
+  size_t xa = size_t(wrap_index(x0, l.width, wrap)), xb = size_t(wrap_index(x0 + 1, l.width, wrap));
+  size_t ya = size_t(wrap_index(y0, l.height, wrap)) * l.width, yb = size_t(wrap_index(y0 + 1, l.height, wrap)) * l.width;
+  const float w00 = (1.f - ax) * (1.f - ay), w10 = ax * (1.f - ay), w01 = (1.f - ax) * ay, w11 = ax * ay;
+  if (m_channels == 1) {
+    const float* d = l.data.data();
+    return Color(w00 * d[ya + xa] + w10 * d[ya + xb] + w01 * d[yb + xa] + w11 * d[yb + xb]);
+  }
+  const float *p00 = &l.data[3 * (ya + xa)], *p10 = &l.data[3 * (ya + xb)], *p01 = &l.data[3 * (yb + xa)],
+              *p11 = &l.data[3 * (yb + xb)];
+  return Color(w00 * p00[0] + w10 * p10[0] + w01 * p01[0] + w11 * p11[0],
+               w00 * p00[1] + w10 * p10[1] + w01 * p01[1] + w11 * p11[1],
+               w00 * p00[2] + w10 * p10[2] + w01 * p01[2] + w11 * p11[2]);
+}
+
+Color MipMap::lookup(float s, float t, float width, WrapMode wrap) const {
+  // NOTE: mip level lambda = log2(rho), rho = footprint in texels = width * max(W, H)
+  // (Akenine-Moller et al., "Texture Level of Detail Strategies for Real-Time Ray
+  // Tracing", Ray Tracing Gems ch. 20, 2019, eq. (1); mip-mapping after Williams,
+  // "Pyramidal Parametrics", SIGGRAPH 1983). Trilinear: linear blend of the bilinear
+  // lookups in levels floor(lambda) and floor(lambda) + 1.
+  const Level& l0 = m_levels[0];
+  float texels = width * float(std::max(l0.width, l0.height));
+  if (!(texels > 1.f)) return bilinear(0, s, t, wrap);  // also catches NaN
+  const int top = levels() - 1;
+  float lambda = std::log2(texels);
+  if (!(lambda < float(top))) return bilinear(top, s, t, wrap);
+  int k = int(lambda);
+  float f = lambda - float(k);
+  return bilinear(k, s, t, wrap) * (1.f - f) + bilinear(k + 1, s, t, wrap) * f;
+}
+
+Color MipMap::lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, WrapMode wrap) const {
+  // NOTE: principal axes of the footprint ellipse from two conjugate axis vectors: the
+  // ellipse {a cos(phi) + b sin(phi)} is {x : x^T C^-1 x = 1} with C = a a^T + b b^T
+  // (Heckbert, "Fundamentals of Texture Mapping and Image Warping", MS thesis, UC Berkeley
+  // 1989, EWA filter: the conic of the Jacobian J = [a b] is C = J J^T). The eigenvalues of
+  // C are the squared principal axis lengths (full widths, like a and b).
+  if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y))
+    return lookup(s, t, k_inf, wrap);  // unbounded footprint (inf * 0 would make NaNs): the average
+  float p = a.x * a.x + b.x * b.x, q = a.x * a.y + b.x * b.y, r = a.y * a.y + b.y * b.y;
+  float mean = 0.5f * (p + r);
+  float d = std::sqrt(0.25f * (p - r) * (p - r) + q * q);
+  float major = std::sqrt(std::max(mean + d, 0.f)), minor = std::sqrt(std::max(mean - d, 0.f));
+  if (!std::isfinite(major)) return lookup(s, t, k_inf, wrap);  // overflow: the average
+  // Magnification (the whole ellipse within a texel): bilinear in level 0, as lookup().
+  const float texel = 1.f / float(std::max(m_levels[0].width, m_levels[0].height));
+  if (major <= texel) return bilinear(0, s, t, wrap);
+  // NOTE: Feline (McCormack, Perry, Farkas, Jouppi, "Feline: Fast Elliptical Lines for
+  // Anisotropic Texture Mapping", SIGGRAPH 1999): n trilinear probes spaced along the
+  // major axis, the mip level chosen from the minor axis; the eccentricity is clamped (here
+  // to k_max_probes) by widening the minor axis, as pbrt clamps it for EWA. The probes
+  // are weighted equally (a box along the major axis, matching the film's box pixel
+  // filter; Feline uses Gaussian weights). A minor axis under one texel reads level 0
+  // anyway, so probes one texel apart suffice there.
+  minor = std::max({minor, major / float(k_max_probes), texel});
+  int n = int(std::ceil(major / minor - 1e-3f));
+  if (n <= 1) return lookup(s, t, major, wrap);
+  // Unit eigenvector of the largest eigenvalue.
+  float l1 = mean + d;
+  Vec2f e1(q, l1 - p), e2(l1 - r, q);
+  Vec2f e = (e1.x * e1.x + e1.y * e1.y) >= (e2.x * e2.x + e2.y * e2.y) ? e1 : e2;
+  float el = std::sqrt(e.x * e.x + e.y * e.y);
+  if (!(el > 0.f)) return lookup(s, t, major, wrap);
+  e = e * (major / el);  // full major axis
+  Color sum(0.f);
+  for (int i = 0; i < n; ++i) {
+    float o = (float(i) + 0.5f) / float(n) - 0.5f;  // probe centres spread over the major axis
+    sum += lookup(s + o * e.x, t + o * e.y, minor, wrap);
+  }
+  return sum * (1.f / float(n));
+}
+
+}  // namespace sg

@@ -1,0 +1,87 @@
+// Mip-mapped images for filtered texture lookups (used by the "image" texture plugin).
+//
+// The pyramid is built once per decoded image with an exact area-weighted box filter
+// (the polyphase box filter of Guthe & Heckbert for non-power-of-two sizes): every texel
+// of level k+1 is the area average of the level-k texels it covers. The texels of a level
+// partition the image exactly, so no texel outside the image is ever read and the
+// pyramid is the same for every wrap mode (wrapping applies at lookup time only); the
+// same pyramid can therefore be shared by textures with different wrap modes and uv
+// transforms (see ImageCache).
+//
+// Isotropic lookups (`lookup`) are trilinear: two bilinear lookups in the levels around
+// lambda = log2(width * max(W, H)) (width = footprint in texture units), blended
+// linearly. Anisotropic lookups (`lookup_ellipse`, used with the ray-cone footprint
+// ellipse) average up to 8 trilinear probes along the ellipse's major axis at the level
+// of its minor axis (Feline). Pixels are linear RGB (sRGB images are decoded on load,
+// io/image_io.h), so all filtering happens in linear space.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/math.h"
+#include "io/image_io.h"
+#include "texture/texture.h"
+
+namespace sg {
+
+enum class WrapMode { Repeat, Clamp, Mirror };
+
+/// Parses "repeat", "clamp" or "mirror"; throws sg::Error naming `context` and the
+/// parameter 'wrap' otherwise.
+WrapMode parse_wrap_mode(const std::string& s, const std::string& context);
+
+class MipMap {
+ public:
+  /// Builds the pyramid of `image` (1 or 2 channels: grey, replicated to RGB; 3 or more:
+  /// the first three are RGB, further channels such as alpha are ignored).
+  /// Throws sg::Error for an empty image.
+  explicit MipMap(const ImageData& image);
+
+  int levels() const { return int(m_levels.size()); }
+  int width(int level) const { return m_levels[size_t(level)].width; }
+  int height(int level) const { return m_levels[size_t(level)].height; }
+  /// 1 for grey images, 3 for colour images.
+  int channels() const { return m_channels; }
+  /// Mean of level 0 (accumulated in double precision).
+  Color average() const { return m_average; }
+
+  /// Texel (x, y) of `level` (x to the right, y down, row 0 = top row), indices wrapped.
+  Color texel(int level, int x, int y, WrapMode wrap) const;
+  /// Bilinear interpolation in `level` at image coordinates (s, t) in [0, 1]^2 units
+  /// (s to the right, t down); texel (i, j) has its centre at ((i + 0.5) / w, (j + 0.5) / h).
+  Color bilinear(int level, float s, float t, WrapMode wrap) const;
+  /// Trilinear lookup filtered over a footprint of `width` image widths (0 = bilinear in
+  /// level 0; a footprint covering the image returns the average).
+  Color lookup(float s, float t, float width, WrapMode wrap) const;
+  /// Anisotropic lookup over the ellipse with conjugate axes `a` and `b` (full widths, in
+  /// image units): up to k_max_probes trilinear probes along the major axis, each as wide
+  /// as the minor axis (see mipmap.cpp).
+  Color lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, WrapMode wrap) const;
+  static constexpr int k_max_probes = 8;
+
+ private:
+  struct Level {
+    int width = 0, height = 0;
+    std::vector<float> data;  ///< row-major, m_channels floats per texel
+  };
+  std::vector<Level> m_levels;
+  int m_channels = 3;
+  Color m_average{0.f};
+};
+
+/// Parameters of an image texture besides its pixels.
+struct ImageTextureOptions {
+  WrapMode wrap = WrapMode::Repeat;
+  Color scale{1.f};                  ///< multiplies the looked-up value
+  Vec2f uv_scale{1.f, 1.f};          ///< S in uv' = R S uv + offset (non-zero)
+  Vec2f uv_offset{0.f, 0.f};
+  float uv_rotation_degrees = 0.f;   ///< R: counter-clockwise in the (u, v) plane
+};
+
+/// Image texture over a (possibly shared) pyramid. Implemented in texture/image.cpp.
+std::shared_ptr<Texture> make_image_texture(std::shared_ptr<const MipMap> mipmap,
+                                                  const ImageTextureOptions& options);
+
+}  // namespace sg

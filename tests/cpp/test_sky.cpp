@@ -1,0 +1,422 @@
+// Light "sky" (light/sky.cpp): Preetham et al. 1999 daylight with the sun disc.
+//
+// The model's zenith formulas are re-implemented here in double precision from the paper
+// (appendix A.2); directions follow the documented convention: the sun is at
+// (cos(el) sin(az), sin(el), -cos(el) cos(az)), y up.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "chi2.h"
+#include "core/error.h"
+#include "core/params.h"
+#include "core/rng.h"
+#include "light/light.h"
+
+using namespace sg;
+using namespace sgtest;
+
+namespace {
+
+Vec3f to_f(const DVec3& v) { return Vec3f(float(v.x), float(v.y), float(v.z)); }
+DVec3 to_d(const Vec3f& v) { return {v.x, v.y, v.z}; }
+double deg(double d) { return d * k_pi_d / 180.0; }
+constexpr double k_sun_half_angle_deg = 0.265;
+
+struct SkyParams {
+  double elevation = 45.0, azimuth = 0.0, turbidity = 3.0;
+  bool sun = true;
+  Color albedo = Color(0.2f);
+};
+
+std::shared_ptr<Light> make_sky(const SkyParams& s) {
+  ParamSet p;
+  p.set("elevation", s.elevation);
+  p.set("azimuth", s.azimuth);
+  p.set("turbidity", s.turbidity);
+  p.set("sun", s.sun);
+  p.set("ground_albedo", std::vector<double>{s.albedo.x, s.albedo.y, s.albedo.z});
+  return create_light("sky", p, "light 0");
+}
+
+DVec3 direction(double elevation_deg, double azimuth_deg) {
+  double e = deg(elevation_deg), a = deg(azimuth_deg);
+  return {std::cos(e) * std::sin(a), std::sin(e), -std::cos(e) * std::cos(a)};
+}
+
+/// Preetham appendix A.2 zenith luminance (kcd/m^2).
+double preetham_zenith_luminance(double t, double elevation_deg) {
+  double theta_s = k_pi_d / 2.0 - deg(elevation_deg);
+  double chi = (4.0 / 9.0 - t / 120.0) * (k_pi_d - 2.0 * theta_s);
+  return (4.0453 * t - 4.9710) * std::tan(chi) - 0.2155 * t + 2.4192;
+}
+/// Preetham appendix A.2 zenith chromaticities.
+void preetham_zenith_xy(double t, double elevation_deg, double* x, double* y) {
+  double ts = k_pi_d / 2.0 - deg(elevation_deg), t2 = ts * ts, t3 = t2 * ts;
+  *x = t * t * (0.00166 * t3 - 0.00375 * t2 + 0.00209 * ts) +
+       t * (-0.02903 * t3 + 0.06377 * t2 - 0.03202 * ts + 0.00394) +
+       (0.11693 * t3 - 0.21196 * t2 + 0.06052 * ts + 0.25886);
+  *y = t * t * (0.00275 * t3 - 0.00610 * t2 + 0.00317 * ts) +
+       t * (-0.04214 * t3 + 0.08970 * t2 - 0.04153 * ts + 0.00516) +
+       (0.15346 * t3 - 0.26756 * t2 + 0.06670 * ts + 0.26688);
+}
+/// Linear sRGB -> CIE XYZ (IEC 61966-2-1, D65).
+DVec3 rgb_to_xyz(const Color& c) {
+  return {0.4124564 * c.x + 0.3575761 * c.y + 0.1804375 * c.z, 0.2126729 * c.x + 0.7151522 * c.y + 0.0721750 * c.z,
+          0.0193339 * c.x + 0.1191920 * c.y + 0.9503041 * c.z};
+}
+
+/// Irradiance on a surface with normal n from light samples.
+Color mc_irradiance(const Light& l, const DVec3& n, int samples, uint64_t seed) {
+  Pcg32 rng(seed);
+  double e[3] = {0, 0, 0};
+  for (int i = 0; i < samples; ++i) {
+    LightSample ls;
+    if (!l.sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) continue;
+    double c = ddot(n, to_d(ls.wi));
+    if (c <= 0.0) continue;
+    for (int k = 0; k < 3; ++k) e[k] += double(ls.li[k]) * c / double(ls.pdf);
+  }
+  return Color(float(e[0] / samples), float(e[1] / samples), float(e[2] / samples));
+}
+
+/// Horizontal irradiance of a sky without sun by quadrature (midpoint in cos theta, phi).
+DVec3 quadrature_horizontal_irradiance(const Light& sky_without_sun) {
+  const int nz = 200, nphi = 400;
+  DVec3 e{0, 0, 0};
+  for (int i = 0; i < nz; ++i)
+    for (int j = 0; j < nphi; ++j) {
+      double z = (i + 0.5) / nz, phi = 2.0 * k_pi_d * (j + 0.5) / nphi, r = std::sqrt(1.0 - z * z);
+      Color l = sky_without_sun.le(to_f({r * std::cos(phi), z, r * std::sin(phi)}));
+      e.x += l.x * z, e.y += l.y * z, e.z += l.z * z;
+    }
+  double w = 2.0 * k_pi_d / (double(nz) * nphi);
+  return {e.x * w, e.y * w, e.z * w};
+}
+
+/// Sun irradiance on a surface facing it: disc radiance x solid angle of the disc.
+DVec3 sun_normal_irradiance(const Light& with_sun, const Light& without_sun, const DVec3& sun_dir) {
+  Color l = with_sun.le(to_f(sun_dir)) - without_sun.le(to_f(sun_dir));
+  double omega = 2.0 * k_pi_d * (1.0 - std::cos(deg(k_sun_half_angle_deg)));
+  return {l.x * omega, l.y * omega, l.z * omega};
+}
+
+}  // namespace
+
+// At the zenith the Perez ratio is 1, so the sky's luminance there is Preetham's zenith
+// luminance Y_z (kcd/m^2, here / 683 lm/W) and its chromaticity (x_z, y_z).
+TEST(sky, zenith_matches_preetham_formulas) {
+  for (double t : {2.0, 3.0, 6.0, 10.0})
+    for (double el : {5.0, 20.0, 45.0, 70.0, 89.0}) {
+      SkyParams s;
+      s.turbidity = t;
+      s.elevation = el;
+      s.sun = false;
+      auto sky = make_sky(s);
+      DVec3 xyz = rgb_to_xyz(sky->le(Vec3f(0.f, 1.f, 0.f)));
+      double y_kcd = xyz.y * 683.0 / 1000.0;
+      EXPECT_NEAR(y_kcd / preetham_zenith_luminance(t, el), 1.0, 1e-4) << "T " << t << ", elevation " << el;
+      double x_z, y_z;
+      preetham_zenith_xy(t, el, &x_z, &y_z);
+      double sum = xyz.x + xyz.y + xyz.z;
+      EXPECT_NEAR(xyz.x / sum, x_z, 1e-4) << "T " << t << ", elevation " << el;
+      EXPECT_NEAR(xyz.y / sum, y_z, 1e-4) << "T " << t << ", elevation " << el;
+    }
+  // A clear sky's zenith is blue.
+  SkyParams s;
+  s.turbidity = 2.0;
+  Color z = make_sky(s)->le(Vec3f(0.f, 1.f, 0.f));
+  EXPECT_GT(z.z, 1.5f * z.x);
+}
+
+// Circumsolar brightening: for a clear sky, directions near the sun are brighter than the
+// same elevation on the other side of the sky, and brightness falls with the angle to the sun.
+TEST(sky, brighter_near_sun_than_opposite) {
+  for (double t : {2.0, 3.0})
+    for (double el : {15.0, 40.0}) {
+      SkyParams s;
+      s.turbidity = t;
+      s.elevation = el;
+      s.azimuth = 70.0;
+      auto sky = make_sky(s);
+      double prev = k_inf;
+      for (double d : {2.0, 5.0, 10.0, 20.0, 45.0, 90.0}) {
+        double l = luminance(sky->le(to_f(direction(el, 70.0 + d))));
+        EXPECT_LT(l, prev) << "T " << t << ", elevation " << el << ", " << d << " degrees from the sun";
+        prev = l;
+      }
+      double near = luminance(sky->le(to_f(direction(el, 75.0))));
+      double opposite = luminance(sky->le(to_f(direction(el, 250.0))));
+      EXPECT_GT(near, 3.0 * opposite) << "T " << t << ", elevation " << el;
+    }
+}
+
+// The sun disc lies where elevation and azimuth say, with a 0.53 degree diameter, and its
+// samples point there; azimuth 0 is -z, 90 is +x.
+TEST(sky, sun_direction_matches_elevation_and_azimuth) {
+  struct Case {
+    double el, az;
+    DVec3 landmark;  // the direction by the documented compass convention
+  };
+  const Case cases[] = {{3.0, 0.0, {0, 0, -1}}, {3.0, 90.0, {1, 0, 0}}, {3.0, 180.0, {0, 0, 1}},
+                        {3.0, 270.0, {-1, 0, 0}}, {35.0, 123.0, {}}, {89.5, 300.0, {0, 1, 0}}};
+  for (const Case& c : cases) {
+    SkyParams s;
+    s.elevation = c.el;
+    s.azimuth = c.az;
+    s.turbidity = 2.0;
+    auto sky = make_sky(s);
+    s.sun = false;
+    auto no_sun = make_sky(s);
+    DVec3 d = direction(c.el, c.az);
+    if (c.landmark.x != 0 || c.landmark.y != 0 || c.landmark.z != 0) {
+      EXPECT_GT(ddot(d, dnormalize(c.landmark)), std::cos(deg(3.5))) << "elevation " << c.el << ", azimuth " << c.az;
+    }
+    double sky_l = luminance(no_sun->le(to_f(d)));
+    EXPECT_GT(luminance(sky->le(to_f(d))), 100.0 * sky_l) << "no sun at elevation " << c.el << ", azimuth " << c.az;
+    // Disc edge: 0.25 degrees from the centre is inside, 0.28 outside (in four directions).
+    DFrame f(d);
+    for (double phi : {0.0, 1.6, 3.2, 4.8}) {
+      auto at = [&](double a) {
+        return to_f(f.to_world(std::sin(deg(a)) * std::cos(phi), std::sin(deg(a)) * std::sin(phi), std::cos(deg(a))));
+      };
+      EXPECT_GT(luminance(sky->le(at(0.25))), 100.0 * sky_l);
+      EXPECT_EQ(sky->le(at(0.28)), no_sun->le(at(0.28)));
+    }
+    // Samples with the sun's radiance point at the disc.
+    Pcg32 rng(801);
+    int on_sun = 0, off = 0;
+    for (int i = 0; i < 20000; ++i) {
+      LightSample ls;
+      if (!sky->sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) continue;
+      if (luminance(ls.li) < 100.0 * sky_l) continue;
+      ++on_sun;
+      off += ddot(to_d(ls.wi), d) < std::cos(deg(0.3));
+    }
+    EXPECT_GT(on_sun, 1000);
+    EXPECT_EQ(off, 0);
+  }
+}
+
+// Sky sampling (without sun) against pdf_le(), binned in equirectangular (u, v) on a 64 x 32
+// grid (4 x 4 table pixels per bin, where the density in (u, v) is piecewise constant).
+TEST(sky, sample_direction_chi2) {
+  SkyParams s;
+  s.elevation = 25.0;
+  s.azimuth = 200.0;
+  s.sun = false;
+  auto sky = make_sky(s);
+  Grid2D g{64, 32, 0.0, 1.0, 0.0, 1.0};
+  auto dir_of = [](double u, double v) {
+    double th = k_pi_d * v, ph = 2.0 * k_pi_d * u;
+    return DVec3{std::sin(th) * std::sin(ph), std::cos(th), -std::sin(th) * std::cos(ph)};
+  };
+  const int n = 1000000;
+  Pcg32 rng(802);
+  std::vector<double> obs(g.size(), 0.0);
+  int failed = 0;
+  for (int i = 0; i < n; ++i) {
+    LightSample ls;
+    if (!sky->sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) {
+      ++failed;
+      continue;
+    }
+    double u = wrap_phi(std::atan2(double(ls.wi.x), -double(ls.wi.z))) / (2.0 * k_pi_d);
+    double v = std::acos(std::max(-1.0, std::min(1.0, double(ls.wi.y)))) / k_pi_d;
+    obs[size_t(g.cell(u, v))] += 1.0;
+  }
+  EXPECT_EQ(failed, 0);
+  // Midpoint rule with two nodes per table pixel and axis, none on a pixel edge.
+  std::vector<double> exp(g.size());
+  for (int iy = 0; iy < g.ny; ++iy)
+    for (int ix = 0; ix < g.nx; ++ix) {
+      double acc = 0.0;
+      for (int a = 0; a < 8; ++a)
+        for (int b = 0; b < 8; ++b) {
+          double u = g.cx0(ix) + (g.cx1(ix) - g.cx0(ix)) * (a + 0.5) / 8;
+          double v = g.cy0(iy) + (g.cy1(iy) - g.cy0(iy)) * (b + 0.5) / 8;
+          acc += double(sky->pdf_le(to_f(dir_of(u, v)))) * 2.0 * k_pi_d * k_pi_d * std::sin(k_pi_d * v);
+        }
+      exp[size_t(iy) * g.nx + ix] = n * acc / 64.0 * (g.cx1(ix) - g.cx0(ix)) * (g.cy1(iy) - g.cy0(iy));
+    }
+  EXPECT_NEAR(sum(exp) / n, 1.0, 1e-3) << "pdf_le does not integrate to 1";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+// With the sun, a sample is a one-sample mixture of disc and table: le()/pdf_le() report
+// exactly the sample's values, and the fraction of samples within 0.3 degrees of the sun
+// matches the integral of pdf_le over that cone (2-cell chi-square).
+TEST(sky, sun_and_sky_mixture_is_consistent) {
+  SkyParams s;
+  s.elevation = 50.0;
+  s.azimuth = 30.0;
+  auto sky = make_sky(s);
+  const DVec3 sun = direction(s.elevation, s.azimuth);
+  const double cone = deg(0.3);
+  const int n = 1000000;
+  Pcg32 rng(803);
+  int inside = 0, bad_le = 0, bad_pdf = 0, failed = 0;
+  for (int i = 0; i < n; ++i) {
+    LightSample ls;
+    if (!sky->sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) {
+      ++failed;
+      continue;
+    }
+    bad_le += sky->le(ls.wi) != ls.li;
+    bad_pdf += sky->pdf_le(ls.wi) != ls.pdf;
+    inside += std::atan2(std::sqrt(ddot(dcross(to_d(ls.wi), sun), dcross(to_d(ls.wi), sun))), ddot(to_d(ls.wi), sun)) <=
+              cone;
+  }
+  EXPECT_EQ(failed, 0);
+  EXPECT_EQ(bad_le, 0);
+  EXPECT_EQ(bad_pdf, 0);
+  // Integral of pdf_le over the cone in (tau = theta / cone, phi): adaptive Simpson in tau
+  // (the disc edge is a jump) inside a 64-node midpoint rule in phi.
+  DFrame frame(sun);
+  double p_cone = 0.0;
+  for (int j = 0; j < 64; ++j) {
+    double phi = 2.0 * k_pi_d * (j + 0.5) / 64;
+    p_cone += integrate_1d(
+        [&](double tau) {
+          return double(sky->pdf_le(to_f(cone_dir(frame, cone, tau, phi)))) * cone_jacobian(cone, tau);
+        },
+        0.0, 1.0, 1e-9, 22, 4);
+  }
+  p_cone *= 2.0 * k_pi_d / 64;
+  EXPECT_GT(p_cone, 0.1);
+  EXPECT_LT(p_cone, 0.9);
+  Chi2Result r = chi2_test({double(inside), double(n - inside)}, {n * p_cone, n * (1.0 - p_cone)});
+  EXPECT_TRUE(r.ok) << "inside the cone: " << inside << " of " << n << ", expected " << n * p_cone << "; "
+                    << r.message;
+}
+
+// Light sampling is unbiased: its horizontal irradiance equals quadrature of the sky plus
+// the disc's radiance x solid angle x sin(elevation); it grows with the sun's elevation; the
+// ground below the horizon has radiance albedo x E_h / pi.
+TEST(sky, horizontal_irradiance_and_ground) {
+  const Color albedo(0.1f, 0.2f, 0.3f);
+  double prev = 0.0;
+  for (double el : {5.0, 20.0, 45.0, 70.0, 90.0}) {
+    SkyParams s;
+    s.elevation = el;
+    s.azimuth = 40.0;
+    s.albedo = albedo;
+    auto sky = make_sky(s);
+    s.sun = false;
+    auto no_sun = make_sky(s);
+    DVec3 e_sky = quadrature_horizontal_irradiance(*no_sun);
+    DVec3 e_sun = sun_normal_irradiance(*sky, *no_sun, direction(el, 40.0));
+    double sin_el = std::sin(deg(el));
+    Color e_mc = mc_irradiance(*sky, {0, 1, 0}, 400000, 804);
+    double expected[3] = {e_sky.x + e_sun.x * sin_el, e_sky.y + e_sun.y * sin_el, e_sky.z + e_sun.z * sin_el};
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(e_mc[k] / expected[k], 1.0, 1e-2) << "elevation " << el << ", channel " << k;
+    EXPECT_GT(luminance(e_mc), 1.05 * prev) << "elevation " << el;
+    prev = luminance(e_mc);
+    Color ground = sky->le(to_f(dnormalize({0.3, -1.0, 0.2})));
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(ground[k] / (albedo[k] * expected[k] / k_pi_d), 1.0, 2e-3) << "elevation " << el << ", channel " << k;
+  }
+  // A black ground is never sampled.
+  SkyParams s;
+  s.albedo = Color(0.f);
+  auto sky = make_sky(s);
+  EXPECT_EQ(sky->le(Vec3f(0.f, -1.f, 0.f)), Color(0.f));
+  Pcg32 rng(805);
+  int below = 0;
+  for (int i = 0; i < 100000; ++i) {
+    LightSample ls;
+    if (sky->sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) below += ls.wi.y < 0.f;
+  }
+  EXPECT_EQ(below, 0);
+}
+
+// The sun's radiance follows the atmosphere: about 100 klx of direct normal illuminance at
+// the zenith on a clear day (T = 2), less with haze, and redder towards the horizon.
+TEST(sky, sun_radiance_is_physical) {
+  auto normal_illuminance = [](double el, double t, Color* rgb) {
+    SkyParams s;
+    s.elevation = el;
+    s.turbidity = t;
+    auto sky = make_sky(s);
+    s.sun = false;
+    auto no_sun = make_sky(s);
+    DVec3 e = sun_normal_irradiance(*sky, *no_sun, direction(el, 0.0));
+    *rgb = to_f(e);
+    return 683.0 * luminance(*rgb);
+  };
+  Color zenith_rgb, low_rgb, hazy_rgb;
+  double e_clear = normal_illuminance(90.0, 2.0, &zenith_rgb);
+  EXPECT_GT(e_clear, 85e3);
+  EXPECT_LT(e_clear, 130e3);
+  EXPECT_LT(normal_illuminance(90.0, 6.0, &hazy_rgb), 0.8 * e_clear);
+  EXPECT_LT(normal_illuminance(10.0, 2.0, &low_rgb), 0.5 * e_clear);
+  EXPECT_GT(low_rgb.x / low_rgb.z, 1.5 * zenith_rgb.x / zenith_rgb.z) << "the low sun is not redder";
+}
+
+TEST(sky, power_and_visibility) {
+  SkyParams s;
+  s.sun = false;
+  s.albedo = Color(0.f);  // so that the sun does not change the ground's radiance
+  auto sky = make_sky(s);
+  EXPECT_TRUE(sky->is_infinite());
+  EXPECT_FALSE(sky->is_delta());
+  EXPECT_TRUE(sky->visible_to_camera());
+  Bounds3 b;
+  b.expand(Vec3f(-1.f, -1.f, -1.f));
+  b.expand(Vec3f(1.f, 1.f, 1.f));  // radius sqrt(3)
+  sky->preprocess(b);
+  // pi r^2 x 4 pi x mean luminance (by quadrature over the sphere; the sampling table is
+  // a pixel-centre approximation of it).
+  const int nz = 200, nphi = 400;
+  double mean = 0.0;
+  for (int i = 0; i < nz; ++i)
+    for (int j = 0; j < nphi; ++j) {
+      double z = -1.0 + 2.0 * (i + 0.5) / nz, phi = 2.0 * k_pi_d * (j + 0.5) / nphi, r = std::sqrt(1.0 - z * z);
+      mean += luminance(sky->le(to_f({r * std::cos(phi), z, r * std::sin(phi)})));
+    }
+  mean /= double(nz) * nphi;
+  EXPECT_NEAR(sky->power() / (k_pi_d * 3.0 * 4.0 * k_pi_d * mean), 1.0, 1e-2);
+  // The sun adds its irradiance x pi r^2.
+  s.sun = true;
+  auto with_sun = make_sky(s);
+  with_sun->preprocess(b);
+  DVec3 e_sun = sun_normal_irradiance(*with_sun, *sky, direction(s.elevation, s.azimuth));
+  EXPECT_NEAR((with_sun->power() - sky->power()) / (k_pi_d * 3.0 * luminance(to_f(e_sun))), 1.0, 1e-3);
+  ParamSet hidden;
+  hidden.set("visible", false);
+  EXPECT_FALSE(create_light("sky", hidden, "l")->visible_to_camera());
+}
+
+TEST(sky, parameter_errors) {
+  auto message = [](const std::string& key, ParamSet::Value v) {
+    ParamSet p;
+    p.set(key, v);
+    try {
+      create_light("sky", p, "light 4");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  std::string m = message("elevation", 95.0);
+  EXPECT_NE(m.find("'elevation'"), std::string::npos) << m;
+  EXPECT_NE(m.find("[0, 90]"), std::string::npos) << m;
+  m = message("elevation", -1.0);
+  EXPECT_NE(m.find("'elevation'"), std::string::npos) << m;
+  m = message("turbidity", 1.0);
+  EXPECT_NE(m.find("'turbidity'"), std::string::npos) << m;
+  EXPECT_NE(m.find("[1.7, 10]"), std::string::npos) << m;
+  m = message("turbidity", 12.0);
+  EXPECT_NE(m.find("[1.7, 10]"), std::string::npos) << m;
+  m = message("ground_albedo", 1.5);
+  EXPECT_NE(m.find("'ground_albedo'"), std::string::npos) << m;
+  EXPECT_NE(m.find("[0, 1]"), std::string::npos) << m;
+  m = message("strength", -2.0);
+  EXPECT_NE(m.find("'strength'"), std::string::npos) << m;
+  m = message("turbidty", 3.0);
+  EXPECT_NE(m.find("did you mean 'turbidity'"), std::string::npos) << m;
+  m = message("azimuth", double(NAN));
+  EXPECT_NE(m.find("'azimuth'"), std::string::npos) << m;
+}
