@@ -1,7 +1,8 @@
 """The built-in demo scene: procedural primitives only (no files, no downloads).
 
-A grey ground plane with three diffuse spheres and three boxes in varied colours, lit
-by a warm sun of 2 degrees angular diameter (soft shadow edges) and a blue sky.
+A grey ground plane with spheres and boxes of car paint (coated), gold (rough
+conductor), glass (dielectric), brushed aluminium (anisotropic conductor), green plastic
+and white diffuse, lit by a physical sun and sky (Preetham 1999).
 Class ids: 1 = ground, 2 = sphere, 3 = box; every object has its own instance id.
 Renders 640x480 at 64 spp in a few seconds on two cores.
 
@@ -23,7 +24,7 @@ CLASSES = {1: "ground", 2: "sphere", 3: "box"}
 
 DEMO_SCENE: Dict[str, Any] = {
     "version": 1,
-    "description": "synthgen demo: spheres and boxes on a ground plane, sun and sky",
+    "description": "synthgen demo: metal, glass, car paint and plastic on a ground plane under a physical sun and sky",
     "camera": {
         "width": 640,
         "height": 480,
@@ -32,32 +33,31 @@ DEMO_SCENE: Dict[str, Any] = {
     },
     "materials": {
         "ground": {"type": "diffuse", "albedo": [0.5, 0.48, 0.45]},
-        "red": {"type": "diffuse", "albedo": [0.8, 0.12, 0.1]},
-        "gold": {"type": "diffuse", "albedo": [0.85, 0.62, 0.18]},
-        "blue": {"type": "diffuse", "albedo": [0.12, 0.3, 0.8]},
+        "car_paint": {"type": "coated", "albedo": [0.75, 0.06, 0.05], "roughness": 0.08, "ior": 1.5},
+        "gold": {"type": "conductor", "metal": "gold", "roughness": 0.18},
+        "glass": {"type": "dielectric", "ior": 1.5, "roughness": 0.0},
         "white": {"type": "diffuse", "albedo": [0.82, 0.82, 0.8]},
-        "green": {"type": "diffuse", "albedo": [0.2, 0.6, 0.25]},
-        "teal": {"type": "diffuse", "albedo": [0.1, 0.55, 0.6]},
+        "green_plastic": {"type": "coated", "albedo": [0.15, 0.55, 0.2], "roughness": 0.35},
+        "brushed_aluminium": {"type": "conductor", "metal": "aluminium", "roughness": 0.3, "anisotropy": 0.8},
     },
     "objects": [
-        {"name": "ground", "primitive": "plane", "size": [40.0, 40.0], "material": "ground", "class_id": 1},
-        {"name": "red sphere", "primitive": "sphere", "radius": 0.7, "translate": [-1.5, 0.7, 0.4],
-         "material": "red", "class_id": 2},
+        {"name": "ground", "primitive": "plane", "size": [400.0, 400.0], "material": "ground", "class_id": 1},
+        {"name": "car-paint sphere", "primitive": "sphere", "radius": 0.7, "translate": [-1.5, 0.7, 0.4],
+         "material": "car_paint", "class_id": 2},
         {"name": "gold sphere", "primitive": "sphere", "radius": 0.45, "translate": [0.35, 0.45, -0.9],
          "material": "gold", "class_id": 2},
-        {"name": "blue sphere", "primitive": "sphere", "radius": 0.9, "translate": [1.9, 0.9, 1.5],
-         "material": "blue", "class_id": 2},
+        {"name": "glass sphere", "primitive": "sphere", "radius": 0.9, "translate": [1.9, 0.9, 1.5],
+         "material": "glass", "class_id": 2},
         {"name": "white box", "primitive": "box", "size": [1.0, 1.0, 1.0], "translate": [-0.1, 0.5, 1.7],
          "rotate": {"axis": [0.0, 1.0, 0.0], "angle": 25.0}, "material": "white", "class_id": 3},
-        {"name": "green box", "primitive": "box", "size": [0.6, 1.6, 0.6], "translate": [-2.8, 0.8, 2.4],
-         "rotate": {"axis": [0.0, 1.0, 0.0], "angle": -15.0}, "material": "green", "class_id": 3},
-        {"name": "teal box", "primitive": "box", "size": 0.5, "translate": [1.5, 0.25, -1.3],
-         "rotate": {"euler": [0.0, 40.0, 0.0]}, "material": "teal", "class_id": 3},
+        {"name": "plastic box", "primitive": "box", "size": [0.6, 1.6, 0.6], "translate": [-2.8, 0.8, 2.4],
+         "rotate": {"axis": [0.0, 1.0, 0.0], "angle": -15.0}, "material": "green_plastic", "class_id": 3},
+        {"name": "brushed metal box", "primitive": "box", "size": 0.5, "translate": [1.5, 0.25, -1.3],
+         "rotate": {"euler": [0.0, 40.0, 0.0]}, "material": "brushed_aluminium", "class_id": 3},
     ],
     "lights": [
-        {"name": "sun", "type": "sun", "direction": [-0.55, 0.7, 0.25], "irradiance": [3.2, 3.0, 2.7],
-         "angular_diameter": 2.0},
-        {"name": "sky", "type": "environment", "radiance": [0.22, 0.32, 0.52]},
+        {"name": "sun and sky", "type": "sky", "elevation": 35.0, "azimuth": 220.0, "turbidity": 2.5,
+         "strength": 0.02},
     ],
     "render": {"spp": 64, "max_depth": 8, "rr_depth": 5, "seed": 0},
 }

@@ -961,7 +961,7 @@ TEXTURE = Record({
 }, doc="texture")
 
 MATERIAL = Record({
-    "type": Choice(["diffuse", "emissive", "coated", "mix"], doc="material plugin"),
+    "type": Choice(["diffuse", "emissive", "coated", "conductor", "dielectric", "mix"], doc="material plugin"),
 }, tag="type", variants={
     "diffuse": {
         "albedo": ColorOrTexture((0.5, 0.5, 0.5), min=0, max=1, doc="Lambertian reflectance"),
@@ -977,6 +977,24 @@ MATERIAL = Record({
         "ior": Number(1.5, min=1, max=4, doc="index of refraction of the coat (1: no coat)"),
         "roughness": Number(0.0, min=0, max=1, doc="coat roughness (GGX alpha = roughness^2; 0: smooth)"),
         "specular": Number(1.0, min=0, max=1, doc="scales the coat reflection (the rest is absorbed)"),
+    },
+    "conductor": {
+        "metal": Choice(["aluminium", "aluminum", "chrome", "chromium", "copper", "gold", "iron", "silver"], None,
+                        doc="measured metal preset (default aluminium unless eta/k are given)"),
+        "eta": _color(None, 0, None, "real part of the complex IOR per channel (with k, instead of metal)"),
+        "k": _color(None, 0, None, "imaginary part (extinction) of the complex IOR per channel"),
+        "roughness": Number(None, min=0, max=1, doc="GGX roughness (alpha = roughness^2; default 0.3; 0: mirror)"),
+        "anisotropy": Number(None, min=-1, max=1, doc="stretches the highlight along the surface tangent"),
+        "roughness_u": Number(None, min=0, max=1, doc="roughness along the tangent (instead of roughness/anisotropy)"),
+        "roughness_v": Number(None, min=0, max=1, doc="roughness along the bitangent"),
+        "specular_tint": ColorOrTexture(None, min=0, max=1, doc="multiplies the reflection"),
+    },
+    "dielectric": {
+        "ior": Number(1.5, min=1, max=4, min_open=False, doc="index of refraction inside"),
+        "exterior_ior": Number(1.0, min=1, max=4, doc="index of refraction outside"),
+        "roughness": Number(0.0, min=0, max=1, doc="GGX roughness (0: smooth glass)"),
+        "thin": Bool(False, doc="thin-walled (windows, car glass): no bending, slab reflectance"),
+        "transmittance": ColorOrTexture(None, min=0, max=1, doc="tint of the transmitted light"),
     },
     "mix": {
         "material_a": MaterialRef(doc="material used where weight = 0"),

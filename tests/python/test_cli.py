@@ -100,7 +100,7 @@ def test_demo(tmp_path, capsys):
     assert meta["scene"]["classes"] == {"1": "ground", "2": "sphere", "3": "box"}
     ids = oiio.ImageBuf(str(out / "class.png")).get_pixels(oiio.UINT16)
     assert {1, 2, 3} <= set(np.unique(ids))
-    assert "demo: 7 objects, 2 lights, 48x32" in capsys.readouterr().out
+    assert "demo: 7 objects, 1 light, 48x32" in capsys.readouterr().out
 
 
 def test_demo_default_output_directory(tmp_path, monkeypatch):
@@ -162,3 +162,14 @@ def test_schema_command(capsys):
     assert cli.main(["schema"]) == 0
     out = capsys.readouterr().out
     assert "fov_y: number in (0, 180)" in out and "[type: sun]" in out
+
+
+def test_demo_shows_metal_glass_and_coated_under_a_sun_and_sky():
+    """The materials issue: the demo shows at least a metal, a glass and a coated object
+    under a physical sun-sky."""
+    from synthgen.demo import DEMO_SCENE
+
+    used = {o["material"] for o in DEMO_SCENE["objects"]}
+    types = {DEMO_SCENE["materials"][m]["type"] for m in used}
+    assert {"conductor", "dielectric", "coated"} <= types
+    assert any(l["type"] == "sky" for l in DEMO_SCENE["lights"])
