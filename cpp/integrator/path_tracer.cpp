@@ -43,6 +43,9 @@ struct PathState {
   uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
   uint32_t bounce = 0;
   bool prev_delta = true;  ///< the camera "sampled" the first direction
+  /// Product of eta^2 over refractions: removes the 1/eta^2 radiance scaling from the
+  /// Russian-roulette decision (pbrt-v4 "etaScale"), so paths inside glass are not culled.
+  float eta_scale = 1.f;
   bool active = true;
   bool hit_geometry = false;
   float cone_width = 0.f, cone_spread = 0.f;  ///< ray cone for texture filtering (ray_cone.h)
@@ -141,6 +144,7 @@ class PathTracer {
     }
     st.beta *= bs.weight;
     st.prev_pdf = bs.pdf;
+    if (bs.flags & k_bsdf_transmission) st.eta_scale *= bs.eta * bs.eta;
     st.prev_delta = (bs.flags & k_bsdf_delta) != 0;
     st.cone_spread += bsdf_spread_angle(bs);
     ++st.segments;
@@ -152,7 +156,7 @@ class PathTracer {
     }
     // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
     if (st.segments > m_s.rr_depth) {
-      float q = std::max(0.05f, 1.f - max_component(st.beta));
+      float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
       if (sampler.get(base + 6) < q) {
         st.active = false;
         return shadow_requested;

@@ -56,6 +56,15 @@ inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
   return t.eval(si.uv, si.uv_footprint);
 }
 
+/// Coverage from a texture used as an alpha map: its alpha channel when it has one (image
+/// files with 2 channels, grey + alpha, or 4+, RGBA), else its first channel (grey masks,
+/// constants). Point-sampled (bilinear in the full-resolution level), since the cut-out test
+/// runs with footprint 0 (see Material::has_alpha).
+inline float eval_alpha_texture(const Texture& t, const SurfaceInteraction& si) {
+  if (t.has_alpha_channel()) return t.eval_alpha(si.uv, 0.f);
+  return t.eval(si.uv, 0.f).x;
+}
+
 enum BsdfFlags : uint32_t {
   k_bsdf_none = 0,
   k_bsdf_diffuse = 1u << 0,
@@ -94,6 +103,19 @@ class Material {
   virtual Color average_emission() const { return Color(0.f); }
   /// True when emission leaves both faces.
   virtual bool two_sided_emission() const { return false; }
+  /// Coverage for alpha cut-outs in [0, 1]: 1 = opaque surface, 0 = a hole the ray passes.
+  virtual float alpha(const SurfaceInteraction& si) const { return 1.f; }
+  /// True when alpha() can be below alpha_cutoff() somewhere. Only then are the meshes
+  /// using this material alpha-tested during traversal (Accel filter callback): a hit with
+  /// alpha < alpha_cutoff is not a surface at all, for camera, shadow and label rays alike
+  /// (glTF alphaMode MASK). The test runs inside traversal with only `uv`, `inst` and
+  /// `prim` of `si` filled (footprint 0): alpha() must not use anything else, and must be
+  /// deterministic (labels stay exact).
+  virtual bool has_alpha() const { return false; }
+  /// Threshold of the cut-out test (glTF alphaCutoff, default 0.5).
+  virtual float alpha_cutoff() const { return 0.5f; }
+  /// The cut-out test: false when a hit at `si` must be ignored.
+  bool alpha_opaque(const SurfaceInteraction& si) const { return !has_alpha() || alpha(si) >= alpha_cutoff(); }
 };
 
 using TextureLookup = std::function<std::shared_ptr<Texture>(uint32_t id)>;

@@ -27,6 +27,10 @@ class Texture {
   }
   /// Average value over the texture (used for light power estimates and albedo priors).
   virtual Color average() const = 0;
+  /// True when the texture has an alpha channel (image files with 2 or 4+ channels).
+  virtual bool has_alpha_channel() const { return false; }
+  /// Alpha channel at `uv`, filtered like eval(); 1 without an alpha channel.
+  virtual float eval_alpha(const Vec2f& uv, float footprint = 0.f) const { return 1.f; }
 };
 
 class ImageCache;

@@ -979,8 +979,9 @@ MATERIAL = Record({
         "specular": Number(1.0, min=0, max=1, doc="scales the coat reflection (the rest is absorbed)"),
     },
     "conductor": {
-        "metal": Choice(["aluminium", "aluminum", "chrome", "chromium", "copper", "gold", "iron", "silver"], None,
-                        doc="measured metal preset (default aluminium unless eta/k are given)"),
+        "metal": Choice(["aluminium", "aluminum", "chrome", "chromium", "copper", "gold", "iron", "silver", "none"],
+                        None, doc="measured metal preset (default aluminium unless eta/k are given; none: "
+                                  "perfect mirror)"),
         "eta": _color(None, 0, None, "real part of the complex IOR per channel (with k, instead of metal)"),
         "k": _color(None, 0, None, "imaginary part (extinction) of the complex IOR per channel"),
         "roughness": Number(None, min=0, max=1, doc="GGX roughness (alpha = roughness^2; default 0.3; 0: mirror)"),
@@ -990,8 +991,9 @@ MATERIAL = Record({
         "specular_tint": ColorOrTexture(None, min=0, max=1, doc="multiplies the reflection"),
     },
     "dielectric": {
-        "ior": Number(1.5, min=1, max=4, min_open=False, doc="index of refraction inside"),
-        "exterior_ior": Number(1.0, min=1, max=4, doc="index of refraction outside"),
+        "ior": Number(1.5, min=1, max=10, doc="index of refraction inside (must differ from exterior_ior "
+                                             "unless thin)"),
+        "exterior_ior": Number(1.0, min=1, max=10, doc="index of refraction outside"),
         "roughness": Number(0.0, min=0, max=1, doc="GGX roughness (0: smooth glass)"),
         "thin": Bool(False, doc="thin-walled (windows, car glass): no bending, slab reflectance"),
         "transmittance": ColorOrTexture(None, min=0, max=1, doc="tint of the transmitted light"),
