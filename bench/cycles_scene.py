@@ -31,6 +31,10 @@ Conversions (each checked numerically by `vs_cycles.py --check`):
   two_sided) plus a Diffuse BSDF for its albedo; conductor / dielectric / coated -> Principled
   BSDF or Glass BSDF approximations (different models: see docs/benchmarks.md).
 
+Keys starting with "_" in plugin parameters are hints for this script (ignored by synthgen):
+`_blender_roughness`, `_blender_mapping` (3x3 world -> Blender equirect lookup direction),
+`_blender_interpolation`. `cycles_max_bounces` at the top level overrides the bounce mapping.
+
 Prints one line ``CYCLES_RESULT {json}`` with the timings (render_s = bpy.ops.render.render).
 """
 import json
@@ -217,8 +221,8 @@ def _mix_children(p):
 
 
 def _principled_roughness(p):
-    """Blender roughness r gives GGX alpha = r^2. The description carries `alpha` (GGX alpha)
-    next to the synthgen parameters when the benchmark knows the plugin's mapping."""
+    """Blender roughness r gives GGX alpha = r^2, as synthgen's `roughness` does; vs_cycles.py
+    may pass an explicit `_blender_roughness` next to the synthgen parameters."""
     if "_blender_roughness" in p:
         return float(p["_blender_roughness"])
     return float(p.get("roughness", 0.0))

@@ -23,12 +23,16 @@ an HDR map from blender-data; only the synthgen materials available at run time)
 Per scene it prints render time (Cycles: bpy.ops.render.render, which includes Cycles' scene
 sync and BVH build; synthgen: commit() + render(), the latter = stats['wall_time_s']) and
 whole-process time (subprocess start to exit, incl. scene load and writing the EXR) of both,
-the PSNR of both images against a converged synthgen reference (--ref-spp, cached in
---ref-dir), and the per-channel mean difference in percent between converged Cycles and
-converged synthgen images. Last lines:
+medians over --runs interleaved runs; the PSNR of both images against a converged synthgen
+image (--ref-spp, cached in --ref-dir), and of the Cycles image against a converged Cycles
+image; the per-channel mean difference in percent between the converged Cycles and synthgen
+images; and an equal-noise speedup (synthgen's time scaled by the sample factor it needs to
+reach Cycles' noise). Last lines:
 
     speedup_vs_cycles=<geometric mean over scenes of Cycles render time / synthgen render time>
     max_mean_diff_pct=<largest |mean difference| over scenes whose light transport models agree>
+
+Figures, conversions and the known model differences: docs/benchmarks.md.
 """
 from __future__ import annotations
 
@@ -432,10 +436,11 @@ def write_exr_half(path: str, rgb: np.ndarray, attributes: dict | None = None) -
     os.replace(tmp, path)
 
 
-def psnr(img: np.ndarray, ref: np.ndarray) -> float:
-    """PSNR in dB of linear radiance; the peak is the reference's 99th percentile of per-pixel
-    max channel (a robust white level: emitters seen directly would otherwise set it)."""
-    peak = float(np.percentile(ref.max(axis=-1), 99.0))
+def psnr(img: np.ndarray, ref: np.ndarray, peak_of: np.ndarray | None = None) -> float:
+    """PSNR in dB of linear radiance; the peak is the 99th percentile of the per-pixel max channel
+    of `peak_of` (default: the reference), a robust white level (emitters seen directly would
+    otherwise set it)."""
+    peak = float(np.percentile((ref if peak_of is None else peak_of).max(axis=-1), 99.0))
     mse = float(np.mean((img.astype(np.float64) - ref.astype(np.float64)) ** 2))
     return float("inf") if mse == 0 else 10.0 * math.log10(peak * peak / mse)
 
@@ -490,7 +495,7 @@ def reference_images(spec: dict, args, blender: str, workdir: str) -> tuple:
 def run_benchmark(args, blender: str) -> int:
     print(f"settings: {args.width}x{args.height}, {args.spp} spp, {args.threads} threads, {args.runs} run(s) each, "
           f"references {args.ref_spp} spp (cache {os.path.relpath(args.ref_dir, REPO)})")
-    speedups, agree_diffs, agree_names = [], [], []
+    speedups, equal_noise, agree_diffs, agree_names = [], [], [], []
     with tempfile.TemporaryDirectory(prefix="vs_cycles_") as work:
         for name in args.scenes:
             if name == "cbox" and not os.path.isdir(CBOX_DIR):
@@ -517,6 +522,12 @@ def run_benchmark(args, blender: str) -> int:
             sg_ref, cy_ref = reference_images(spec, args, blender, work)
             diff = mean_diff_pct(cy_ref, sg_ref)
             speedups.append(cy_render / sg_render)
+            # Noise of each renderer against its own converged image (no model difference), same peak.
+            noise_cy, noise_sg = psnr(cy_img, cy_ref, sg_ref), psnr(sg_img, sg_ref)
+            # synthgen's MSE falls as 1/spp (independent samples): the time it needs to match Cycles'
+            # noise is its time x 10^(dPSNR / 10).
+            eq = cy_render / (sg_render * 10.0 ** ((noise_cy - noise_sg) / 10.0))
+            equal_noise.append(eq)
             print(f"{name}_cycles_render_s={cy_render:.3f}")
             if all("pathtrace_s" in t for t in cy_runs):
                 print(f"{name}_cycles_pathtrace_s={med(cy_runs, 'pathtrace_s'):.2f}  (Cycles' own figure, 10 ms resolution)")
@@ -525,12 +536,14 @@ def run_benchmark(args, blender: str) -> int:
             print(f"{name}_cycles_process_s={med(cy_runs, 'process_s'):.3f}")
             print(f"{name}_synthgen_process_s={med(sg_runs, 'process_s'):.3f}")
             print(f"{name}_psnr_cycles_db={psnr(cy_img, sg_ref):.2f}  (vs synthgen {args.ref_spp} spp; "
-                  f"vs Cycles {args.ref_spp} spp: {psnr(cy_img, cy_ref):.2f})")
+                  f"vs Cycles {args.ref_spp} spp: {noise_cy:.2f})")
             print(f"{name}_psnr_synthgen_db={psnr(sg_img, sg_ref):.2f}  (vs synthgen {args.ref_spp} spp)")
             print(f"{name}_mean_rgb_synthgen_ref={_fmt(sg_ref.mean(axis=(0, 1)))}")
             print(f"{name}_mean_rgb_cycles_ref={_fmt(cy_ref.mean(axis=(0, 1)))}")
             print(f"{name}_mean_diff_pct={_fmt(diff)}  (Cycles vs synthgen, {args.ref_spp} spp each)")
-            print(f"{name}_speedup_vs_cycles={cy_render / sg_render:.3f}", flush=True)
+            print(f"{name}_speedup_vs_cycles={cy_render / sg_render:.3f}")
+            print(f"{name}_equal_noise_speedup={eq:.3f}  (Cycles time / synthgen time to reach Cycles' "
+                  f"{args.spp}-spp noise, each against its own converged image)", flush=True)
             if name in MODELS_AGREE:
                 agree_diffs.append(float(np.abs(diff).max()))
                 agree_names.append(name)
@@ -538,6 +551,7 @@ def run_benchmark(args, blender: str) -> int:
         print("no scene rendered")
         return 1
     print(f"models_agree_scenes={','.join(agree_names) if agree_names else '(none)'}")
+    print(f"equal_noise_speedup_vs_cycles={math.exp(sum(math.log(s) for s in equal_noise) / len(equal_noise)):.3f}")
     print(f"speedup_vs_cycles={math.exp(sum(math.log(s) for s in speedups) / len(speedups)):.3f}")
     print(f"max_mean_diff_pct={max(agree_diffs) if agree_diffs else float('nan'):.3f}")
     return 0
@@ -627,47 +641,48 @@ def run_check(args, blender: str) -> int:
         return "ok" if ok else "FAIL"
 
     with tempfile.TemporaryDirectory(prefix="vs_cycles_check_") as work:
-        # 1. Camera: three small one-sided emitters (R, G, B) seen directly on a 96x64 image with an
-        #    off-centre principal point and a tilted pose; the radiance centroid of each channel must
-        #    be the projection of the emitter's centre (OpenCV convention, pixel centres at +0.5)
-        #    up to the sampling noise of the edge pixels (~0.01 px at 1024 spp).
-        W, H = 96, 64
-        eye = np.array([0.4, 1.1, -3.0])
-        wfc = sg.PinholeCamera.look_at(eye.tolist(), [0.1, 0.3, 0.5], [0.15, 1.0, 0.0])
-        cam = sg.PinholeCamera(70.0, 70.0, 41.3, 36.7, W, H, wfc)
-        pts = [np.array(wfc[:3, :3] @ v + wfc[:3, 3], np.float64)
-               for v in ([-0.55, -0.3, 3.0], [0.45, 0.2, 2.6], [0.05, 0.32, 3.4])]
-        # Parallel to the image plane (facing the camera's -z) with edges along the camera's x and y,
-        # so each projects to an axis-aligned square [u0, u1] x [v0, v1] whose exact pixel coverage
-        # gives the expected centroid of the box-filtered image (weights at pixel centres).
-        side = 0.12
-        meshes = [_mesh_entry(f"q{i}", _quad_facing(p, -wfc[:3, 2], side, a=wfc[:3, 0])) for i, p in enumerate(pts)]
-        mats = [{"type": "emissive", "params": {"radiance": c}} for c in ([1, 0, 0], [0, 1, 0], [0, 0, 1])]
-        inst = [{"mesh": i, "material": i, "world_from_object": eye4} for i in range(3)]
-        sgi, cyi = both(_check_spec("check_camera", W, H, cam, meshes, mats, inst, [], 1), "camera", n=1024)
-        yy, xx = np.mgrid[0:H, 0:W] + 0.5
+        # 1. Camera: three small one-sided emitters (R, G, B) seen directly on a landscape (96x64)
+        #    and a portrait (64x96) image with an off-centre principal point and a tilted pose; the
+        #    radiance centroid of each channel must be the exact centroid of the emitter's
+        #    box-filtered projection (OpenCV convention, pixel centres at +0.5) up to the sampling
+        #    noise of the edge pixels (~0.01 px at 1024 spp).
         def overlap(lo, hi, n):
             k = np.arange(n, dtype=np.float64)
             return np.clip(np.minimum(hi, k + 1) - np.maximum(lo, k), 0.0, None)
 
-        areas = []
-        for ch, p in enumerate(pts):
-            u, v = cam.project(p.tolist())
-            z = float(np.dot(p - wfc[:3, 3], wfc[:3, 2]))
-            hu, hv = 0.5 * side * cam.fx / z, 0.5 * side * cam.fy / z
-            cov = np.outer(overlap(v - hv, v + hv, H), overlap(u - hu, u + hu, W))
-            areas.append(cov.sum())
-            u, v = float((cov * xx).sum() / cov.sum()), float((cov * yy).sum() / cov.sum())
-            cs = [(float((img[..., ch] * xx).sum() / img[..., ch].sum()), float((img[..., ch] * yy).sum() / img[..., ch].sum()))
-                  for img in (sgi, cyi)]
-            err = max(math.hypot(c[0] - u, c[1] - v) for c in cs)
-            print(f"check camera emitter {'RGB'[ch]}: exact ({u:.3f}, {v:.3f})  synthgen centroid "
-                  f"({cs[0][0]:.3f}, {cs[0][1]:.3f})  Cycles centroid ({cs[1][0]:.3f}, {cs[1][1]:.3f})  "
-                  f"max err {err:.3f} px {verdict(err < 0.03)}")
-        # Emitted radiance seen directly (radiance 1 per channel): image sum = projected area in pixels.
-        rel = [img.sum(axis=(0, 1)) / np.array(areas) - 1.0 for img in (sgi, cyi)]
-        print(f"check emitter radiance x area: synthgen/exact - 1 = {_fmt(100 * rel[0])} %  Cycles/exact - 1 = "
-              f"{_fmt(100 * rel[1])} % {verdict(all(np.all(np.abs(r) < 0.01) for r in rel))}")
+        for W, H, cx, cy in ((96, 64, 41.3, 36.7), (64, 96, 36.7, 41.3)):
+            eye = np.array([0.4, 1.1, -3.0])
+            wfc = sg.PinholeCamera.look_at(eye.tolist(), [0.1, 0.3, 0.5], [0.15, 1.0, 0.0])
+            cam = sg.PinholeCamera(70.0, 70.0, cx, cy, W, H, wfc)
+            pts = [np.array(wfc[:3, :3] @ v + wfc[:3, 3], np.float64)
+                   for v in ([-0.55, -0.3, 3.0], [0.45, 0.2, 2.6], [0.05, 0.32, 3.4])]
+            # Parallel to the image plane (facing the camera's -z) with edges along the camera's x
+            # and y, so each projects to an axis-aligned square [u0, u1] x [v0, v1] whose exact pixel
+            # coverage gives the expected centroid of the box-filtered image.
+            side = 0.12
+            meshes = [_mesh_entry(f"q{i}", _quad_facing(p, -wfc[:3, 2], side, a=wfc[:3, 0])) for i, p in enumerate(pts)]
+            mats = [{"type": "emissive", "params": {"radiance": c}} for c in ([1, 0, 0], [0, 1, 0], [0, 0, 1])]
+            inst = [{"mesh": i, "material": i, "world_from_object": eye4} for i in range(3)]
+            sgi, cyi = both(_check_spec("check_camera", W, H, cam, meshes, mats, inst, [], 1), "camera", n=1024)
+            yy, xx = np.mgrid[0:H, 0:W] + 0.5
+            areas = []
+            for ch, p in enumerate(pts):
+                u, v = cam.project(p.tolist())
+                z = float(np.dot(p - wfc[:3, 3], wfc[:3, 2]))
+                hu, hv = 0.5 * side * cam.fx / z, 0.5 * side * cam.fy / z
+                cov = np.outer(overlap(v - hv, v + hv, H), overlap(u - hu, u + hu, W))
+                areas.append(cov.sum())
+                u, v = float((cov * xx).sum() / cov.sum()), float((cov * yy).sum() / cov.sum())
+                cs = [(float((img[..., ch] * xx).sum() / img[..., ch].sum()),
+                       float((img[..., ch] * yy).sum() / img[..., ch].sum())) for img in (sgi, cyi)]
+                err = max(math.hypot(c[0] - u, c[1] - v) for c in cs)
+                print(f"check camera {W}x{H} emitter {'RGB'[ch]}: exact ({u:.3f}, {v:.3f})  synthgen centroid "
+                      f"({cs[0][0]:.3f}, {cs[0][1]:.3f})  Cycles centroid ({cs[1][0]:.3f}, {cs[1][1]:.3f})  "
+                      f"max err {err:.3f} px {verdict(err < 0.03)}")
+            # Emitted radiance seen directly (radiance 1 per channel): image sum = projected area in pixels.
+            rel = [img.sum(axis=(0, 1)) / np.array(areas) - 1.0 for img in (sgi, cyi)]
+            print(f"check camera {W}x{H} emitter radiance x area: synthgen/exact - 1 = {_fmt(100 * rel[0])} %  "
+                  f"Cycles/exact - 1 = {_fmt(100 * rel[1])} % {verdict(all(np.all(np.abs(r) < 0.01) for r in rel))}")
 
         # 2. Sun: white-ish Lambertian plane facing the sun, E = 2 W/m^2 -> L = rho E / pi.
         d = np.array([0.3, 1.0, 0.2]) / np.linalg.norm([0.3, 1.0, 0.2])
@@ -752,7 +767,7 @@ def run_check(args, blender: str) -> int:
                                [{"mesh": 0, "material": 0, "world_from_object": _rows(P.translate([0, 0.5, 0]))}],
                                [{"type": "envmap", "params": envmap_params({"filename": hdr, "rotation": 40.0,
                                                                               "visible": False})}], 2)
-            sgi, cyi = both(spec, "envmap_lit", n=256)
+            sgi, cyi = both(spec, "envmap_lit", n=2048)
             d = mean_diff_pct(cyi, sgi)
             print(f"check envmap lighting a Lambertian sphere (map hidden from the camera): Cycles vs synthgen "
                   f"{_fmt(d)} % {verdict(np.all(np.abs(d) < 1.0))}")

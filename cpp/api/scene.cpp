@@ -8,6 +8,8 @@
 namespace sg {
 
 Scene::Scene() : m_accel(new Accel) {
+  // Cut-out materials: hits on alpha-tested meshes are filtered inside traversal.
+  m_accel->set_alpha_test(&alpha_test_hit, &m_render_scene);
   ParamSet p;
   p.set("albedo", 0.5);
   MaterialContext none{[](uint32_t) { return nullptr; }, [](uint32_t) { return nullptr; }};
@@ -234,11 +236,16 @@ bool Scene::has_pending_edits() const { return m_structure_dirty || !m_removed_i
 void Scene::commit() {
   uint64_t builds_before = m_accel->mesh_builds();
   bool top_dirty = !m_removed_instances.empty();
-  // 1. Bottom-level BVHs: only new or edited meshes.
+  // 0. Which meshes need the alpha test: those used by an instance whose material (override
+  // or per-triangle) has alpha. A mesh whose need changed is rebuilt (Embree re-commits the
+  // mesh's scene when its filter functions change), and counted as a mesh BVH build.
+  std::vector<char> needs_alpha = meshes_needing_alpha_test();
+  // 1. Bottom-level BVHs: only new or edited meshes (or meshes whose alpha test toggled).
   for (size_t i = 0; i < m_meshes.size(); ++i) {
     auto& e = m_meshes[i];
-    if (!e || !e->dirty) continue;
-    m_accel->build_mesh(uint32_t(i), *e->mesh);
+    if (!e) continue;
+    if (!e->dirty && bool(needs_alpha[i]) == m_accel->mesh_alpha_tested(uint32_t(i))) continue;
+    m_accel->build_mesh(uint32_t(i), *e->mesh, needs_alpha[i] != 0);
     e->dirty = false;
     top_dirty = true;
   }
@@ -259,7 +266,31 @@ void Scene::commit() {
   m_stats.mesh_bvh_builds = m_accel->mesh_builds();
   m_stats.mesh_bvh_builds_last = m_accel->mesh_builds() - builds_before;
   m_stats.top_level_builds = m_accel->top_level_builds();
+  m_stats.alpha_tested_meshes = 0;
+  for (size_t i = 0; i < m_meshes.size(); ++i) m_stats.alpha_tested_meshes += m_meshes[i] && m_accel->mesh_alpha_tested(uint32_t(i));
   ++m_stats.commits;
+}
+
+std::vector<char> Scene::meshes_needing_alpha_test() const {
+  std::vector<char> needs(m_meshes.size(), 0), triangles_checked(m_meshes.size(), 0);
+  for (const auto& e : m_instances) {
+    if (!e || needs[e->mesh_id]) continue;
+    if (e->material_id >= 0) {
+      needs[e->mesh_id] = m_materials[size_t(e->material_id)]->object->has_alpha();
+      continue;
+    }
+    // Per-triangle materials (missing ones fall back to the default material: opaque),
+    // scanned once per mesh however many instances share it.
+    if (triangles_checked[e->mesh_id]) continue;
+    triangles_checked[e->mesh_id] = 1;
+    for (int32_t mid : m_meshes[e->mesh_id]->mesh->material_ids)
+      if (mid >= 0 && size_t(mid) < m_materials.size() && m_materials[size_t(mid)] &&
+          m_materials[size_t(mid)]->object->has_alpha()) {
+        needs[e->mesh_id] = 1;
+        break;
+      }
+  }
+  return needs;
 }
 
 void Scene::build_render_scene() {
@@ -372,7 +403,9 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   settings.validate();
   if (has_pending_edits()) commit();
   m_render_scene.camera = m_camera;
+  uint64_t alpha_calls_before = m_accel->alpha_test_calls();
   render_path_traced(m_render_scene, settings, film);
+  film->stats.alpha_test_calls = m_accel->alpha_test_calls() - alpha_calls_before;
   film->stats.mesh_bvh_builds = m_stats.mesh_bvh_builds;
   film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last;
   film->stats.top_level_builds = m_stats.top_level_builds;

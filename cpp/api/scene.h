@@ -43,6 +43,7 @@ struct CommitStats {
   uint64_t mesh_bvh_builds_last = 0;   ///< during the last commit
   uint64_t top_level_builds = 0;
   uint64_t commits = 0;
+  uint64_t alpha_tested_meshes = 0;    ///< meshes traversed with the alpha test (cut-outs)
 };
 
 class Scene {
@@ -59,8 +60,8 @@ class Scene {
   void remove_mesh(uint32_t id);
   const TriangleMesh& mesh(uint32_t id) const;
   /// Imports OBJ (+MTL), PLY, glTF 2.0 / GLB via assimp, flattening node transforms into
-  /// one mesh with per-triangle materials (diffuse, base colour texture resolved relative
-  /// to the file). Throws sg::FileError naming the file.
+  /// one mesh with per-triangle materials ("principled": glTF metallic-roughness, OBJ/MTL
+  /// mapped, textures resolved relative to the file). Throws sg::FileError naming the file.
   ImportResult load_mesh_file(const std::string& path);
 
   // Textures -------------------------------------------------------------------------
@@ -153,6 +154,8 @@ class Scene {
   void check_material_id(int64_t id, const char* context) const;
   MaterialContext material_context(std::vector<uint32_t>* depends_on = nullptr) const;
   void build_render_scene();
+  /// Per mesh slot: 1 when some instance uses it with a material that has alpha (cut-outs).
+  std::vector<char> meshes_needing_alpha_test() const;
 
   std::vector<std::optional<MeshEntry>> m_meshes;
   std::vector<std::optional<TextureEntry>> m_textures;

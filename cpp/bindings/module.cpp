@@ -128,6 +128,7 @@ py::dict stats_to_dict(const RenderStats& s) {
   d["mesh_bvh_builds"] = s.mesh_bvh_builds;
   d["mesh_bvh_builds_last_commit"] = s.mesh_bvh_builds_last_commit;
   d["top_level_builds"] = s.top_level_builds;
+  d["alpha_test_calls"] = s.alpha_test_calls;
   d["threads"] = s.threads;
   return d;
 }
@@ -279,6 +280,24 @@ a BVH build). render() commits pending edits first.)doc")
              return s.add_texture(type, params_from_dict(params, "texture '" + type + "'"));
            },
            py::arg("type"), py::arg("params") = py::dict())
+      .def("material_info",
+           [](const Scene& s, uint32_t id) {
+             const auto& ms = s.materials();
+             if (id >= ms.size() || !ms[id]) throw Error("material_info: material " + std::to_string(id) + " does not exist");
+             py::dict params;
+             for (const auto& [k, v] : ms[id]->params.values())
+               std::visit([&, key = k](const auto& x) {
+                 using T = std::decay_t<decltype(x)>;
+                 if constexpr (std::is_same_v<T, TextureRef>) params[py::str(key)] = py::make_tuple("texture", x.id);
+                 else params[py::str(key)] = x;
+               }, v);
+             py::dict d;
+             d["type"] = ms[id]->type;
+             d["params"] = params;
+             return d;
+           },
+           py::arg("material_id"),
+           "The type and parameters of a material (texture references as ('texture', id)).")
       .def("add_material",
            [](Scene& s, const std::string& type, const py::dict& params) {
              return s.add_material(type, params_from_dict(params, "material '" + type + "'"));
@@ -326,6 +345,7 @@ a BVH build). render() commits pending edits first.)doc")
         d["mesh_bvh_builds_last"] = s.commit_stats().mesh_bvh_builds_last;
         d["top_level_builds"] = s.commit_stats().top_level_builds;
         d["commits"] = s.commit_stats().commits;
+        d["alpha_tested_meshes"] = s.commit_stats().alpha_tested_meshes;  // cut-out meshes
         d["image_loads"] = s.image_cache().loads();            // image files decoded
         d["image_cache_hits"] = s.image_cache().hits();        // image textures that shared one
         return d;

@@ -19,6 +19,7 @@ struct RenderStats {
   uint64_t mesh_bvh_builds = 0;  ///< total bottom-level BVH builds of the scene so far
   uint64_t mesh_bvh_builds_last_commit = 0;
   uint64_t top_level_builds = 0;
+  uint64_t alpha_test_calls = 0;  ///< candidate hits alpha-tested (cut-outs) during the render
   uint32_t threads = 0;
 };
 

@@ -2,8 +2,10 @@
 
 #include <embree3/rtcore.h>
 
+#include <atomic>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 
 #include "core/error.h"
 
@@ -15,8 +17,50 @@ struct Accel::Impl {
   std::unordered_map<uint32_t, RTCScene> meshes;
   std::unordered_map<uint32_t, RTCGeometry> instances;
   std::unordered_map<uint32_t, uint32_t> instance_mesh;
+  std::unordered_set<uint32_t> alpha_meshes;  ///< mesh slots built with the alpha test
+  AlphaTest alpha_test = nullptr;
+  const void* alpha_user = nullptr;
+  mutable std::atomic<uint64_t> alpha_calls{0};
   std::string last_error;
 };
+
+namespace {
+
+/// The intersect context of every query: Embree passes it unchanged to filter functions,
+/// so the alpha test and its user pointer travel with the ray.
+/// NOTE: Embree 3 allows a user struct that begins with RTCIntersectContext (API manual,
+/// rtcInitIntersectContext: "the context can be extended with additional data").
+struct QueryContext {
+  RTCIntersectContext embree;  // must be first
+  AlphaTest test;
+  const void* user;
+  uint32_t calls;  ///< candidate hits alpha-tested during this query
+};
+
+inline void init_context(QueryContext* c, AlphaTest test, const void* user) {
+  rtcInitIntersectContext(&c->embree);
+  c->test = test;
+  c->user = user;
+  c->calls = 0;
+}
+
+// Intersection and occlusion filter of alpha-tested meshes (N-wide: N = 1 for single rays,
+// 8 or 16 for packets). Rejecting a lane (valid = 0) makes Embree continue traversal as if
+// the triangle were not there, for the closest hit and for occlusion alike.
+void alpha_filter(const RTCFilterFunctionNArguments* args) {
+  auto* c = reinterpret_cast<QueryContext*>(args->context);
+  if (!c->test) return;
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
+    if (args->valid[i] == 0) continue;
+    ++c->calls;
+    uint32_t inst = RTCHitN_instID(args->hit, n, i, 0);
+    uint32_t prim = RTCHitN_primID(args->hit, n, i);
+    if (!c->test(c->user, inst, prim, RTCHitN_u(args->hit, n, i), RTCHitN_v(args->hit, n, i))) args->valid[i] = 0;
+  }
+}
+
+}  // namespace
 
 static void embree_error(void* user, RTCError code, const char* str) {
   auto* last_error = static_cast<std::string*>(user);
@@ -39,7 +83,7 @@ Accel::~Accel() {
   if (m_impl->device) rtcReleaseDevice(m_impl->device);
 }
 
-void Accel::build_mesh(uint32_t slot, const TriangleMesh& mesh) {
+void Accel::build_mesh(uint32_t slot, const TriangleMesh& mesh, bool needs_alpha_test) {
   RTCScene old = nullptr;
   if (auto it = m_impl->meshes.find(slot); it != m_impl->meshes.end()) old = it->second;
   RTCScene scene = rtcNewScene(m_impl->device);
@@ -65,11 +109,17 @@ void Accel::build_mesh(uint32_t slot, const TriangleMesh& mesh) {
     v[3 * i + 2] = mesh.positions[i].z;
   }
   std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
+  if (needs_alpha_test) {
+    rtcSetGeometryIntersectFilterFunction(geom, alpha_filter);
+    rtcSetGeometryOccludedFilterFunction(geom, alpha_filter);
+  }
   rtcCommitGeometry(geom);
   rtcAttachGeometryByID(scene, geom, 0);
   rtcReleaseGeometry(geom);
   rtcCommitScene(scene);
   m_impl->meshes[slot] = scene;
+  if (needs_alpha_test) m_impl->alpha_meshes.insert(slot);
+  else m_impl->alpha_meshes.erase(slot);
   ++m_mesh_builds;
   // Instances of this mesh must point to the new scene.
   for (auto& kv : m_impl->instance_mesh)
@@ -87,7 +137,17 @@ void Accel::release_mesh(uint32_t slot) {
     if (kv.second == slot) throw Error("mesh " + std::to_string(slot) + " is still used by instance " + std::to_string(kv.first));
   rtcReleaseScene(it->second);
   m_impl->meshes.erase(it);
+  m_impl->alpha_meshes.erase(slot);
 }
+
+bool Accel::mesh_alpha_tested(uint32_t slot) const { return m_impl->alpha_meshes.count(slot) != 0; }
+
+void Accel::set_alpha_test(AlphaTest test, const void* user) {
+  m_impl->alpha_test = test;
+  m_impl->alpha_user = user;
+}
+
+uint64_t Accel::alpha_test_calls() const { return m_impl->alpha_calls.load(std::memory_order_relaxed); }
 
 void Accel::set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object) {
   auto mit = m_impl->meshes.find(mesh_slot);
@@ -126,8 +186,8 @@ void Accel::commit() {
 }
 
 bool Accel::intersect(const Ray& ray, RayHit* hit) const {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+  QueryContext ctx;
+  init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   RTCRayHit rh;
   rh.ray.org_x = ray.o.x;
   rh.ray.org_y = ray.o.y;
@@ -143,7 +203,8 @@ bool Accel::intersect(const Ray& ray, RayHit* hit) const {
   rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(m_impl->top, &ctx, &rh);
+  rtcIntersect1(m_impl->top, &ctx.embree, &rh);
+  if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   hit->t = rh.ray.tfar;
   hit->u = rh.hit.u;
@@ -154,8 +215,8 @@ bool Accel::intersect(const Ray& ray, RayHit* hit) const {
 }
 
 bool Accel::occluded(const Ray& ray) const {
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+  QueryContext ctx;
+  init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   RTCRay r;
   r.org_x = ray.o.x;
   r.org_y = ray.o.y;
@@ -169,7 +230,8 @@ bool Accel::occluded(const Ray& ray) const {
   r.mask = 0xffffffffu;
   r.id = 0;
   r.flags = 0;
-  rtcOccluded1(m_impl->top, &ctx, &r);
+  rtcOccluded1(m_impl->top, &ctx.embree, &r);
+  if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
   return r.tfar < 0.f;
 }
 
@@ -223,8 +285,8 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
     if (rays.valid[i]) lanes[n++] = i;
   }
   if (n == 0) return;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+  QueryContext ctx;
+  init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   if (n <= 8) {
     alignas(32) RTCRayHit8 rh;
     alignas(32) int valid[8];
@@ -233,7 +295,8 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
       rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
-    rtcIntersect8(valid, m_impl->top, &ctx, &rh);
+    rtcIntersect8(valid, m_impl->top, &ctx.embree, &rh);
+    if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
     scatter_hits<8>(rh, lanes, n, hits);
   } else {
     alignas(64) RTCRayHit16 rh;
@@ -243,7 +306,8 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
       rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
-    rtcIntersect16(valid, m_impl->top, &ctx, &rh);
+    rtcIntersect16(valid, m_impl->top, &ctx.embree, &rh);
+    if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
     scatter_hits<16>(rh, lanes, n, hits);
   }
 }
@@ -256,19 +320,21 @@ void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size])
     if (rays.valid[i]) lanes[n++] = i;
   }
   if (n == 0) return;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+  QueryContext ctx;
+  init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   if (n <= 8) {
     alignas(32) RTCRay8 r;
     alignas(32) int valid[8];
     fill_rays<8>(rays, lanes, n, r, valid);
-    rtcOccluded8(valid, m_impl->top, &ctx, &r);
+    rtcOccluded8(valid, m_impl->top, &ctx.embree, &r);
+    if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
     for (int k = 0; k < n; ++k) occluded[lanes[k]] = r.tfar[k] < 0.f;
   } else {
     alignas(64) RTCRay16 r;
     alignas(64) int valid[16];
     fill_rays<16>(rays, lanes, n, r, valid);
-    rtcOccluded16(valid, m_impl->top, &ctx, &r);
+    rtcOccluded16(valid, m_impl->top, &ctx.embree, &r);
+    if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
     for (int k = 0; k < n; ++k) occluded[lanes[k]] = r.tfar[k] < 0.f;
   }
 }

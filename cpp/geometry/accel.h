@@ -40,6 +40,14 @@ struct HitPacket {
   bool found[k_packet_size];
 };
 
+/// Alpha test of a candidate hit (cut-outs): instance slot, triangle, barycentrics (u, v)
+/// of vertices 1 and 2. Returns false when the hit is to be ignored (no surface there).
+/// Called from inside Embree traversal, for meshes built with needs_alpha_test only, by
+/// every query (closest hit, occlusion, single and packet); must be thread-safe and
+/// deterministic. The geometry layer knows nothing of materials: the integration layer
+/// installs the test (Accel::set_alpha_test).
+using AlphaTest = bool (*)(const void* user, uint32_t inst, uint32_t prim, float u, float v);
+
 class Accel {
  public:
   Accel();
@@ -47,8 +55,14 @@ class Accel {
   Accel(const Accel&) = delete;
   Accel& operator=(const Accel&) = delete;
 
-  /// Builds (or rebuilds) the bottom-level BVH of mesh slot `mesh_slot`.
-  void build_mesh(uint32_t mesh_slot, const TriangleMesh& mesh);
+  /// Builds (or rebuilds) the bottom-level BVH of mesh slot `mesh_slot`. With
+  /// `needs_alpha_test`, hits on it are filtered by the alpha test (Embree filter functions).
+  /// Switching a mesh's alpha test on or off takes a rebuild (Embree re-commits the scene).
+  void build_mesh(uint32_t mesh_slot, const TriangleMesh& mesh, bool needs_alpha_test = false);
+  /// Whether mesh `mesh_slot` was built with the alpha test (false for unknown slots).
+  bool mesh_alpha_tested(uint32_t mesh_slot) const;
+  /// Installs the alpha test used for meshes built with needs_alpha_test (null: accept all).
+  void set_alpha_test(AlphaTest test, const void* user);
   void release_mesh(uint32_t mesh_slot);
   /// Adds or updates the top-level instance `inst_slot` of mesh `mesh_slot`.
   void set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object);
@@ -65,6 +79,8 @@ class Accel {
   /// Number of bottom-level (per-mesh) BVH builds since construction.
   uint64_t mesh_builds() const { return m_mesh_builds; }
   uint64_t top_level_builds() const { return m_top_builds; }
+  /// Number of candidate hits alpha-tested so far (0 while no mesh needs the test).
+  uint64_t alpha_test_calls() const;
 
  private:
   struct Impl;

@@ -92,6 +92,27 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   return si;
 }
 
+/// The alpha test of candidate hits (geometry/accel.h AlphaTest; `user` is the RenderScene):
+/// false where the hit's material is cut out (Material::alpha_opaque). Only `uv`, `inst` and
+/// `prim` of the interaction are set, uv interpolated exactly as make_interaction does.
+inline bool alpha_test_hit(const void* user, uint32_t inst_slot, uint32_t prim, float u, float v) {
+  const RenderScene& sc = *static_cast<const RenderScene*>(user);
+  const InstanceRecord& inst = sc.instances[inst_slot];
+  const Material* mat = sc.material_of(inst, prim);
+  if (!mat->has_alpha()) return true;
+  const TriangleMesh& m = *inst.mesh;
+  SurfaceInteraction si;
+  if (!m.uvs.empty()) {
+    uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
+    si.uv = m.uvs[i0] * (1.f - u - v) + m.uvs[i1] * u + m.uvs[i2] * v;
+  } else {
+    si.uv = Vec2f(u, v);
+  }
+  si.inst = inst_slot;
+  si.prim = prim;
+  return mat->alpha_opaque(si);
+}
+
 /// Error bound of points sampled on an emissive triangle: the hit-point bound of
 /// make_interaction (object-space vertices o0..o2 through the instance transform) plus the
 /// barycentric interpolation of the world-space vertices w0..w2 (pbrt-v4 sec. 6.8.5).

@@ -1,6 +1,7 @@
 #include "io/mesh_io.h"
 
 #include <assimp/Importer.hpp>
+#include <assimp/GltfMaterial.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -130,25 +131,85 @@ ImportedModel import_mesh_file(const std::string& path) {
     aiString name;
     if (am->Get(AI_MATKEY_NAME, name) == AI_SUCCESS) im.name = name.C_Str();
     aiColor4D c;
-    if (am->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || am->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS)
-      im.base_color = Color(c.r, c.g, c.b);
+    bool has_base = am->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS;
+    if (has_base || am->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) im.base_color = Color(c.r, c.g, c.b);
     aiColor3D e;
     if (am->Get(AI_MATKEY_COLOR_EMISSIVE, e) == AI_SUCCESS) im.emission = Color(e.r, e.g, e.b);
-    aiString tex;
-    bool has_tex = am->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) == AI_SUCCESS ||
-                   am->GetTexture(aiTextureType_DIFFUSE, 0, &tex) == AI_SUCCESS;
-    if (has_tex && tex.length > 0) {
+    // Resolves texture slot (type, index) into `out`; false when the slot is empty.
+    auto get_texture = [&](aiTextureType type, unsigned index, ImportedTexture* out) {
+      aiString tex;
+      if (am->GetTexture(type, index, &tex) != AI_SUCCESS || tex.length == 0) return false;
       if (const aiTexture* emb = scene->GetEmbeddedTexture(tex.C_Str())) {
-        im.embedded_texture = decode_embedded(emb, path);
-        im.has_embedded_texture = true;
-      } else {
-        fs::path tp = fs::path(std::string(tex.C_Str()));
-        if (tp.is_relative()) tp = dir / tp;
-        if (!fs::exists(tp, ec))
-          throw FileError(path, "material '" + im.name + "' references texture '" + std::string(tex.C_Str()) +
-                                    "' which does not exist (looked for " + tp.string() + ")");
-        im.texture_path = tp.lexically_normal().string();
+        out->pixels = decode_embedded(emb, path);
+        out->embedded = true;
+        return true;
       }
+      fs::path tp = fs::path(std::string(tex.C_Str()));
+      if (tp.is_relative()) tp = dir / tp;
+      if (!fs::exists(tp, ec))
+        throw FileError(path, "material '" + im.name + "' references texture '" + std::string(tex.C_Str()) +
+                                  "' which does not exist (looked for " + tp.string() + ")");
+      out->path = tp.lexically_normal().string();
+      return true;
+    };
+    ImportedTexture base_tex;
+    if (get_texture(aiTextureType_BASE_COLOR, 0, &base_tex) || get_texture(aiTextureType_DIFFUSE, 0, &base_tex)) {
+      im.texture_path = base_tex.path;
+      im.has_embedded_texture = base_tex.embedded;
+      im.embedded_texture = std::move(base_tex.pixels);
+    }
+    get_texture(aiTextureType_NORMALS, 0, &im.normal);
+    get_texture(aiTextureType_EMISSIVE, 0, &im.emissive);
+    float f;
+    if (am->Get(AI_MATKEY_EMISSIVE_INTENSITY, f) == AI_SUCCESS && f >= 0.f) im.emission_strength = f;
+    float metallic, roughness;
+    if (am->Get(AI_MATKEY_METALLIC_FACTOR, metallic) == AI_SUCCESS &&
+        am->Get(AI_MATKEY_ROUGHNESS_FACTOR, roughness) == AI_SUCCESS) {
+      // glTF 2.0 metallic-roughness (assimp 5.2 glTF2 importer): factors, the packed
+      // metallicRoughnessTexture (aiTextureType_UNKNOWN, also listed as METALNESS), the
+      // normal texture scale, base colour alpha and alphaMode / alphaCutoff.
+      im.metallic = metallic;
+      im.roughness = roughness;
+      if (!get_texture(AI_MATKEY_GLTF_PBRMETALLICROUGHNESS_METALLICROUGHNESS_TEXTURE, &im.metallic_roughness))
+        get_texture(aiTextureType_METALNESS, 0, &im.metallic_roughness);
+      if (im.normal.present()) {
+        float scale;
+        if (am->Get(AI_MATKEY_GLTF_TEXTURE_SCALE(aiTextureType_NORMALS, 0), scale) == AI_SUCCESS) im.normal_scale = scale;
+      }
+      if (has_base) im.alpha = c.a;
+      // KHR_materials_transmission / _clearcoat / _ior factors (textures are not imported).
+      float x;
+      if (am->Get(AI_MATKEY_TRANSMISSION_FACTOR, x) == AI_SUCCESS) im.transmission = x;
+      if (am->Get(AI_MATKEY_CLEARCOAT_FACTOR, x) == AI_SUCCESS) im.clearcoat = x;
+      if (am->Get(AI_MATKEY_CLEARCOAT_ROUGHNESS_FACTOR, x) == AI_SUCCESS) im.clearcoat_roughness = x;
+      if (am->Get(AI_MATKEY_REFRACTI, x) == AI_SUCCESS && x > 1.f) im.ior = x;
+      aiString mode;
+      if (am->Get(AI_MATKEY_GLTF_ALPHAMODE, mode) == AI_SUCCESS) {
+        std::string m = mode.C_Str();
+        im.alpha_mode = m == "MASK" ? "mask" : m == "BLEND" ? "blend" : "opaque";
+      }
+      float cutoff;
+      if (am->Get(AI_MATKEY_GLTF_ALPHACUTOFF, cutoff) == AI_SUCCESS) im.alpha_cutoff = cutoff;
+    } else {
+      // Phong-style materials (OBJ/MTL and most legacy formats): Kd is the base colour;
+      // Ks decides the dielectric specular F0 = min(luminance(Ks), 0.08), i.e. specular =
+      // F0 / 0.08 (no Ks: 0); the Phong exponent Ns becomes roughness = sqrt(2 / (Ns + 2)).
+      // NOTE: Walter et al. 2007, "Microfacet Models for Refraction", eq. 30 / sec. 5.2
+      // relate the Phong exponent to Beckmann alpha_b = sqrt(2 / (Ns + 2)); roughness is
+      // taken as that alpha (a common Phong-to-GGX mapping, e.g. three.js / Blender's MTL
+      // importers use the same family), which keeps shiny (large Ns) materials sharp.
+      aiColor3D ks;
+      im.specular = 0.f;
+      if (am->Get(AI_MATKEY_COLOR_SPECULAR, ks) == AI_SUCCESS)
+        im.specular = std::min(std::max(0.2126f * ks.r + 0.7152f * ks.g + 0.0722f * ks.b, 0.f), 0.08f) / 0.08f;
+      float ns;
+      im.roughness = 1.f;
+      if (am->Get(AI_MATKEY_SHININESS, ns) == AI_SUCCESS && ns > 0.f) im.roughness = std::sqrt(2.f / (ns + 2.f));
+      float d;
+      if (am->Get(AI_MATKEY_OPACITY, d) == AI_SUCCESS) im.alpha = std::min(std::max(d, 0.f), 1.f);
+      get_texture(aiTextureType_OPACITY, 0, &im.opacity);
+      // Partial coverage (d < 1 or map_d) is rendered as a cut-out at 0.5 (glTF BLEND).
+      if (im.alpha < 1.f || im.opacity.present()) im.alpha_mode = "blend";
     }
     model.materials.push_back(std::move(im));
   }

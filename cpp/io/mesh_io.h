@@ -10,6 +10,16 @@
 
 namespace sg {
 
+/// An image referenced by a material: a file or pixels embedded in the model (GLB).
+struct ImportedTexture {
+  std::string path;  ///< resolved absolute path, or ""
+  bool embedded = false;
+  ImageData pixels;  ///< decoded, not colour-converted pixels of an embedded image
+  bool present() const { return embedded || !path.empty(); }
+};
+
+/// A material as the file describes it, mapped to the parameters of "principled" (see
+/// import_mesh_file for the glTF and OBJ/MTL mappings).
 struct ImportedMaterial {
   std::string name;
   Color base_color{0.8f, 0.8f, 0.8f};
@@ -17,6 +27,17 @@ struct ImportedMaterial {
   std::string texture_path;  ///< resolved absolute path of the base colour image, or ""
   bool has_embedded_texture = false;
   ImageData embedded_texture;  ///< decoded pixels of an embedded (GLB) base colour image
+  float metallic = 0.f, roughness = 0.5f, specular = 0.5f;
+  float transmission = 0.f, clearcoat = 0.f, clearcoat_roughness = 0.f, ior = 1.5f;  ///< glTF KHR extensions
+  float emission_strength = 1.f;
+  float alpha = 1.f;                ///< base colour alpha factor (glTF) or MTL `d`
+  std::string alpha_mode = "opaque";  ///< opaque, mask or blend (glTF alphaMode)
+  float alpha_cutoff = 0.5f;
+  ImportedTexture metallic_roughness;  ///< glTF packed texture: B = metallic, G = roughness
+  ImportedTexture normal;              ///< tangent-space normal map (linear)
+  float normal_scale = 1.f;
+  ImportedTexture emissive;  ///< emission colour image (sRGB), times `emission`
+  ImportedTexture opacity;   ///< separate alpha map (MTL map_d)
 };
 
 struct ImportedModel {

@@ -119,7 +119,7 @@ class ConductorMaterial final : public Material {
 
  private:
   Color fresnel(float cos_i) const { return m_perfect ? Color(1.f) : fresnel_conductor(cos_i, m_eta, m_k); }
-  Color tint(const SurfaceInteraction& si) const { return m_tint->eval(si.uv, si.uv_footprint); }
+  Color tint(const SurfaceInteraction& si) const { return eval_texture(*m_tint, si); }
 
   /// f cos_i (returned in *f) and the sampling density (*pdf) of the rough lobe; false when
   /// (wo, wi) is not a valid reflection pair.

@@ -184,7 +184,7 @@ class DielectricMaterial final : public Material {
     bool reflect;
   };
 
-  Color transmittance(const SurfaceInteraction& si) const { return m_transmittance->eval(si.uv, si.uv_footprint); }
+  Color transmittance(const SurfaceInteraction& si) const { return eval_texture(*m_transmittance, si); }
 
   static bool local_frame(const SurfaceInteraction& si, const Vec3f& wo, Frame* f, float* side) {
     float c = dot(si.ng, wo);

@@ -1,4 +1,7 @@
 // Material "diffuse": Lambertian reflection; `albedo` is a colour or a texture.
+// Alpha cut-out (glTF alphaMode MASK): `alpha` is a scalar or a texture (its alpha channel
+// if it has one, else its first channel; see eval_alpha_texture), `alpha_cutoff` in [0, 1]
+// (0.5): where alpha < alpha_cutoff there is no surface (Material::has_alpha).
 #include "material/lambert.h"
 #include "material/material_registry.h"
 
@@ -6,7 +9,8 @@ namespace sg {
 
 class DiffuseMaterial final : public Material {
  public:
-  explicit DiffuseMaterial(std::shared_ptr<Texture> albedo) : m_albedo(std::move(albedo)) {}
+  DiffuseMaterial(std::shared_ptr<Texture> albedo, std::shared_ptr<Texture> alpha, float alpha_cutoff)
+      : m_albedo(std::move(albedo)), m_alpha(std::move(alpha)), m_alpha_cutoff(alpha_cutoff) {}
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     return lambert::eval(si, wo, wi, eval_texture(*m_albedo, si));
   }
@@ -18,9 +22,14 @@ class DiffuseMaterial final : public Material {
   }
   Color albedo(const SurfaceInteraction& si) const override { return eval_texture(*m_albedo, si); }
   uint32_t flags() const override { return k_bsdf_diffuse | k_bsdf_reflection; }
+  float alpha(const SurfaceInteraction& si) const override { return m_alpha ? eval_alpha_texture(*m_alpha, si) : 1.f; }
+  bool has_alpha() const override { return m_alpha != nullptr; }
+  float alpha_cutoff() const override { return m_alpha_cutoff; }
 
  private:
   std::shared_ptr<Texture> m_albedo;
+  std::shared_ptr<Texture> m_alpha;  ///< null: opaque everywhere (no alpha test)
+  float m_alpha_cutoff = 0.5f;
 };
 
 std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const MaterialContext& ctx) {
@@ -28,7 +37,21 @@ std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const 
   Color avg = albedo->average();
   if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
     throw Error("parameter 'albedo': components must lie in [0, 1]");
-  return std::make_shared<DiffuseMaterial>(albedo);
+  float cutoff = params.get_float("alpha_cutoff", 0.5f);
+  if (!(cutoff >= 0.f && cutoff <= 1.f))
+    throw Error("parameter 'alpha_cutoff': must lie in [0, 1], got " + std::to_string(cutoff));
+  std::shared_ptr<Texture> alpha;
+  TextureRef ref;
+  if (params.get_texture("alpha", &ref)) {
+    alpha = ctx.textures(ref.id);
+    if (!alpha) throw Error("parameter 'alpha': texture " + std::to_string(ref.id) + " does not exist");
+  } else {
+    float a = params.get_float("alpha", 1.f);
+    if (!(a >= 0.f && a <= 1.f)) throw Error("parameter 'alpha': must lie in [0, 1], got " + std::to_string(a));
+    // A constant alpha at or above the cutoff is an opaque material: no alpha test at all.
+    if (a < cutoff) alpha = make_constant_texture(Color(a));
+  }
+  return std::make_shared<DiffuseMaterial>(albedo, alpha, cutoff);
 }
 
 }  // namespace sg

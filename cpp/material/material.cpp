@@ -31,6 +31,7 @@ const MaterialFactory k_factories[] = {
     {"diffuse", create_diffuse_material},
     {"emissive", create_emissive_material},
     {"mix", create_mix_material},
+    {"principled", create_principled_material},
 };
 
 }  // namespace

@@ -11,5 +11,6 @@ std::shared_ptr<Material> create_dielectric_material(const ParamSet& params, con
 std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const MaterialContext& ctx);
 std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const MaterialContext& ctx);
 std::shared_ptr<Material> create_mix_material(const ParamSet& params, const MaterialContext& ctx);
+std::shared_ptr<Material> create_principled_material(const ParamSet& params, const MaterialContext& ctx);
 // New plugins: declare `create_<key>_material` here (one line, alphabetical order).
 }  // namespace sg

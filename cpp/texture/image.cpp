@@ -65,6 +65,19 @@ class ImageTexture final : public Texture {
     return m_mip->lookup_ellipse(p.x, 1.f - p.y, Vec2f(a.x, -a.y), Vec2f(b.x, -b.y), m_wrap) * m_scale;
   }
   Color average() const override { return m_mip->average() * m_scale; }
+  bool has_alpha_channel() const override { return m_mip->alpha() != nullptr; }
+  /// The alpha channel, not multiplied by `scale` (a colour multiplier).
+  float eval_alpha(const Vec2f& uv, float footprint) const override {
+    const MipMap* a = m_mip->alpha();
+    if (!a) return 1.f;
+    Vec2f p = uv;
+    float w = footprint;
+    if (!m_identity) {
+      p = Vec2f(m_m00 * uv.x + m_m01 * uv.y + m_offset.x, m_m10 * uv.x + m_m11 * uv.y + m_offset.y);
+      w *= m_footprint_scale;
+    }
+    return a->lookup(p.x, 1.f - p.y, w, m_wrap).x;
+  }
 
  private:
   std::shared_ptr<const MipMap> m_mip;

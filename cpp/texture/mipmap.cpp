@@ -73,6 +73,16 @@ MipMap::MipMap(const ImageData& image) {
       image.pixels.size() < size_t(image.width) * image.height * image.channels)
     throw Error("image texture: the image has no pixels");
   m_channels = image.channels >= 3 ? 3 : 1;
+  if (image.channels == 2 || image.channels >= 4) {
+    const int ac = image.channels == 2 ? 1 : 3;
+    ImageData a;
+    a.width = image.width;
+    a.height = image.height;
+    a.channels = 1;
+    a.pixels.resize(size_t(image.width) * image.height);
+    for (size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = image.pixels[i * image.channels + ac];
+    m_alpha = std::make_shared<const MipMap>(a);
+  }
   Level base;
   base.width = image.width;
   base.height = image.height;

@@ -35,7 +35,8 @@ WrapMode parse_wrap_mode(const std::string& s, const std::string& context);
 class MipMap {
  public:
   /// Builds the pyramid of `image` (1 or 2 channels: grey, replicated to RGB; 3 or more:
-  /// the first three are RGB, further channels such as alpha are ignored).
+  /// the first three are RGB). The alpha channel (channel 1 of a 2-channel image, channel 3
+  /// of a 4+-channel image) gets a separate one-channel pyramid (alpha()).
   /// Throws sg::Error for an empty image.
   explicit MipMap(const ImageData& image);
 
@@ -61,6 +62,9 @@ class MipMap {
   Color lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, WrapMode wrap) const;
   static constexpr int k_max_probes = 8;
 
+  /// Pyramid of the alpha channel (one channel), null when the image has none.
+  const MipMap* alpha() const { return m_alpha.get(); }
+
  private:
   struct Level {
     int width = 0, height = 0;
@@ -69,6 +73,7 @@ class MipMap {
   std::vector<Level> m_levels;
   int m_channels = 3;
   Color m_average{0.f};
+  std::shared_ptr<const MipMap> m_alpha;
 };
 
 /// Parameters of an image texture besides its pixels.

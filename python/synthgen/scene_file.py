@@ -692,6 +692,24 @@ class ScalarOrTexture(Field):
         return self.number.validate(value, loc, ctx)
 
 
+class TextureRefField(Field):
+    """A texture reference ``{texture: NAME}`` (no constant form)."""
+
+    def __init__(self, default: Any = None, doc: str = ""):
+        super().__init__(default, doc)
+
+    def describe(self) -> str:
+        return "{texture: NAME}"
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        if not isinstance(value, Mapping):
+            ctx.error(loc, f"expected {{texture: NAME}}, got {value!r}")
+        rec = _TEXTURE_REF.validate(value, loc, ctx)
+        name = TextureName(rec["texture"])
+        name.loc = rec.locs["texture"]
+        return name
+
+
 class Validated(dict):
     """A validated record: a dict of every field (defaults filled in) that also keeps
     ``loc`` (its own location), ``locs`` (location of each given key's value) and
@@ -961,7 +979,8 @@ TEXTURE = Record({
 }, doc="texture")
 
 MATERIAL = Record({
-    "type": Choice(["diffuse", "emissive", "coated", "conductor", "dielectric", "mix"], doc="material plugin"),
+    "type": Choice(["diffuse", "emissive", "coated", "conductor", "dielectric", "mix", "principled"],
+                   doc="material plugin"),
 }, tag="type", variants={
     "diffuse": {
         "albedo": ColorOrTexture((0.5, 0.5, 0.5), min=0, max=1, doc="Lambertian reflectance"),
@@ -997,6 +1016,28 @@ MATERIAL = Record({
         "roughness": Number(0.0, min=0, max=1, doc="GGX roughness (0: smooth glass)"),
         "thin": Bool(False, doc="thin-walled (windows, car glass): no bending, slab reflectance"),
         "transmittance": ColorOrTexture(None, min=0, max=1, doc="tint of the transmitted light"),
+    },
+    "principled": {
+        "base_color": ColorOrTexture((0.8, 0.8, 0.8), min=0, max=1, doc="base colour (F0 of metals)"),
+        "metallic": ScalarOrTexture(0.0, min=0, max=1, doc="metalness (texture: red channel)"),
+        "roughness": ScalarOrTexture(0.5, min=0, max=1, doc="GGX roughness, clamped to >= 0.03 (texture: red channel)"),
+        "metallic_roughness": TextureRefField(doc="glTF packed texture: metallic = blue x metallic, "
+                                                  "roughness = green x roughness"),
+        "specular": Number(0.5, min=0, max=1, doc="dielectric F0 = 0.08 specular"),
+        "clearcoat": Number(0.0, min=0, max=1, doc="clear coat strength"),
+        "clearcoat_roughness": Number(0.03, min=0, max=1, doc="clear coat roughness"),
+        "transmission": Number(0.0, min=0, max=1, doc="rough glass fraction, tinted by base_color"),
+        "ior": Number(1.5, min=1.01, max=3, doc="index of refraction (transmission)"),
+        "emission": ColorOrTexture((0.0, 0.0, 0.0), min=0, doc="emitted radiance (front face)"),
+        "emission_strength": Number(1.0, min=0, max=1e6, doc="multiplies emission"),
+        "normal_map": TextureRefField(doc="tangent-space normal map (glTF convention, +Y up; linear)"),
+        "normal_scale": Number(1.0, min=-10, max=10, doc="scales the normal map's X and Y"),
+        "bump_map": TextureRefField(doc="height map (red channel)"),
+        "bump_scale": Number(1.0, min=-100, max=100, doc="height in uv units"),
+        "alpha": ScalarOrTexture(1.0, min=0, max=1, doc="coverage (texture: alpha channel, else red)"),
+        "alpha_factor": Number(1.0, min=0, max=1, doc="multiplies alpha"),
+        "alpha_mode": Choice(["opaque", "mask", "blend"], "blend", doc="glTF alpha mode (blend: cut-out at 0.5)"),
+        "alpha_cutoff": Number(0.5, min=0, max=1, doc="coverage threshold of the mask mode"),
     },
     "mix": {
         "material_a": MaterialRef(doc="material used where weight = 0"),

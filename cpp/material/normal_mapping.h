@@ -1,0 +1,88 @@
+// Normal and bump mapping: perturb the shading frame of a SurfaceInteraction before a
+// BSDF is evaluated. Used by "principled"; any material can call these helpers.
+//
+// Tangent space. The frame is (T, B, N) = (si.dpdu, ns x dpdu, si.ns). make_interaction
+// (integrator/interaction.h) derives dpdu per triangle from the uv parameterization
+// (pbrt-v4 sec. 6.5.3) and Gram-Schmidt-orthogonalizes it against the interpolated shading
+// normal, so T follows increasing u and, for uv islands that are not mirrored, B = N x T
+// follows increasing v. This is MikkTSpace's tangent with the bitangent sign +1, computed
+// per triangle instead of averaged per vertex (so tangents are discontinuous across
+// triangle edges where the uv mapping shears; MikkTSpace, Mikkelsen 2008, "Simulation of
+// Wrinkled Surfaces Revisited", sec. 3, smooths them). Mirrored uv islands (negative
+// bitangent sign) get a flipped green channel: a known limitation. Meshes without uvs get
+// an arbitrary tangent (normal maps are then meaningless, but harmless).
+//
+// Conventions (glTF 2.0 spec, sec. 3.9.3 "normalTexture"): RGB in [0, 1] maps to
+// [-1, 1]^3, +X along u (right), +Y along v (up; OpenGL convention: assimp flips glTF's v
+// so that v = 0 is the bottom row, which is also how image textures are addressed), +Z
+// along the normal; the scale multiplies X and Y:
+//   n = normalize((2 rgb - 1) * (scale, scale, 1)).
+#pragma once
+
+#include <cmath>
+
+#include "material/material.h"
+
+namespace sg {
+
+/// Replaces si.ns by the tangent-space direction `n_t` (not necessarily unit) and
+/// re-orthonormalizes dpdu. The new normal is kept in the hemisphere of ng (at least
+/// `k_min_cos` above the geometric surface): a normal map can tilt the shading normal past
+/// the geometric horizon, which would make the BSDF's side tests (which use ng) and its
+/// frame disagree for every direction.
+/// NOTE: the same clamp-to-hemisphere fix as pbrt-v4's NormalMap()/FaceForward usage and
+/// Blender Cycles' ensure_valid_reflection (Schuessler et al. 2017, "Microfacet-based
+/// Normal Mapping for Robust Monte Carlo Path Tracing", sec. 2, describe the problem).
+inline void apply_tangent_normal(SurfaceInteraction* si, Vec3f n_t) {
+  constexpr float k_min_cos = 1e-3f;
+  Frame f = si->shading_frame();
+  float len = length(n_t);
+  if (!(len > 0.f) || !std::isfinite(len)) return;
+  Vec3f n = f.to_world(n_t / len);
+  float c = dot(n, si->ng);
+  if (c < k_min_cos) {
+    // Move n towards ng until it lies k_min_cos above the geometric plane.
+    Vec3f tangential = n - si->ng * c;
+    float tl = length(tangential);
+    if (tl > 0.f) n = tangential / tl * std::sqrt(1.f - k_min_cos * k_min_cos) + si->ng * k_min_cos;
+    else n = si->ng;
+  }
+  n = normalize(n);
+  // Gram-Schmidt: the tangent keeps following u as closely as possible.
+  Vec3f t = si->dpdu - n * dot(n, si->dpdu);
+  float tl = length(t);
+  si->ns = n;
+  si->dpdu = (tl > 1e-6f && std::isfinite(tl)) ? t / tl : Frame(n).s;
+}
+
+/// Tangent-space normal from a normal-map texel (linear RGB, glTF convention).
+inline Vec3f decode_normal_texel(const Color& rgb, float scale) {
+  return Vec3f((2.f * rgb.x - 1.f) * scale, (2.f * rgb.y - 1.f) * scale, 2.f * rgb.z - 1.f);
+}
+
+/// Normal mapping with a tangent-space normal texture.
+inline void apply_normal_map(SurfaceInteraction* si, const Texture& normal_map, float scale) {
+  apply_tangent_normal(si, decode_normal_texel(eval_texture(normal_map, *si), scale));
+}
+
+/// Bump mapping with a height texture (first channel), height in uv units times `scale`
+/// (SurfaceInteraction carries the unit tangent only, not |dp/du|, so the height is
+/// measured relative to the uv parameterization: a slope of 1 in uv tilts by 45 degrees).
+/// The gradient is a central difference over half the ray footprint in uv, or over
+/// `k_min_delta` (about one texel of a 2048^2 texture) when the footprint is smaller or
+/// unknown; the lookups are filtered over the footprint so that the difference sees the
+/// same band-limited height as the shading.
+/// NOTE: Blinn 1978, "Simulation of Wrinkled Surfaces"; the displaced-surface normal
+/// n' ~ n - (dh/du) T - (dh/dv) B for a locally orthonormal (u, v) parameterization
+/// (pbrt-v4 sec. 10.5.2 BumpMap(), with its shift du = 0.5 (|dudx| + |dudy|), else 0.0005).
+inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float scale) {
+  constexpr float k_min_delta = 0.0005f;
+  float d = std::max(0.5f * si->uv_footprint, k_min_delta);
+  float fp = si->uv_footprint;
+  auto h = [&](float du, float dv) { return height.eval(Vec2f(si->uv.x + du, si->uv.y + dv), fp).x; };
+  float dhdu = (h(d, 0.f) - h(-d, 0.f)) / (2.f * d);
+  float dhdv = (h(0.f, d) - h(0.f, -d)) / (2.f * d);
+  apply_tangent_normal(si, Vec3f(-scale * dhdu, -scale * dhdv, 1.f));
+}
+
+}  // namespace sg
