@@ -984,6 +984,8 @@ MATERIAL = Record({
 }, tag="type", variants={
     "diffuse": {
         "albedo": ColorOrTexture((0.5, 0.5, 0.5), min=0, max=1, doc="Lambertian reflectance"),
+        "alpha": ScalarOrTexture(1.0, min=0, max=1, doc="coverage for cut-outs (texture: alpha channel, else first)"),
+        "alpha_cutoff": Number(0.5, min=0, max=1, doc="hits with alpha below this are not surfaces"),
     },
     "emissive": {
         "radiance": _color((1.0, 1.0, 1.0), 0, None, "emitted radiance, W/(m^2 sr) per channel"),
