@@ -31,7 +31,8 @@ inline float next_float_down(float v) {
 /// sec. 6.8: gamma(n) = n u / (1 - n u), u = 2^-24.
 constexpr float gamma_n(int n) { return (n * 0x1p-24f) / (1 - n * 0x1p-24f); }
 
-inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const RayHit& hit) {
+/// `need_tangent` = false skips dpdu (left zero) for materials that do not read it.
+inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const RayHit& hit, bool need_tangent = true) {
   const TriangleMesh& m = *inst.mesh;
   uint32_t i0 = m.indices[3 * hit.prim], i1 = m.indices[3 * hit.prim + 1], i2 = m.indices[3 * hit.prim + 2];
   const Vec3f &p0 = m.positions[i0], &p1 = m.positions[i1], &p2 = m.positions[i2];
@@ -68,6 +69,13 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   }
   Vec3f dpdu_o(0.f);
   bool has_dpdu = false;
+  si.inst = hit.inst;
+  si.prim = hit.prim;
+  if (!need_tangent) {
+    si.uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
+    si.dpdu = Vec3f(0.f);
+    return si;
+  }
   if (!m.uvs.empty()) {
     si.uv = m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
     // NOTE: dp/du from the triangle's uv parameterization (pbrt-v4 sec. 6.5.3):

@@ -78,12 +78,13 @@ class PathTracer {
     const RenderScene& sc = m_scene;
     if (st.bounce == 0) st.hit_geometry = true;
     const InstanceRecord& inst = sc.instances[hit.inst];
-    SurfaceInteraction si = make_interaction(inst, hit);
+    const Material* mat = sc.material_of(inst, hit.prim);
+    const uint32_t needs = mat->needs();
+    SurfaceInteraction si = make_interaction(inst, hit, (needs & k_needs_tangent) != 0);
     if (m_s.texture_filtering) {
       st.cone_width += st.cone_spread * hit.t;  // ray_cone.h, eq. (29)
-      set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
+      if (needs & k_needs_footprint) set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
     }
-    const Material* mat = sc.material_of(inst, hit.prim);
     Vec3f wo = -st.ray.d;
     bool shadow_requested = false;
 
@@ -265,12 +266,12 @@ class PathTracer {
     ++counters.rays;
     if (!sc.accel->intersect(ray, &hit)) return;  // film is initialised to background
     const InstanceRecord& inst = sc.instances[hit.inst];
-    SurfaceInteraction si = make_interaction(inst, hit);
+    const Material* mat = sc.material_of(inst, hit.prim);
+    SurfaceInteraction si = make_interaction(inst, hit, (mat->needs() & k_needs_tangent) != 0);
     // The albedo label is filtered over the whole pixel's cone (no sub-pixel scaling):
     // the pixel-centre ray stands for the pixel.
     if (m_s.texture_filtering)
       set_ray_cone_footprint(&si, inst, hit.prim, ray.d, m_pixel_spread * hit.t);
-    const Material* mat = sc.material_of(inst, hit.prim);
     size_t i = size_t(y) * film->width + x;
     film->depth[i] = hit.t * z_per_t;
     film->distance[i] = hit.t;

@@ -24,6 +24,7 @@ class DiffuseMaterial final : public Material {
   uint32_t flags() const override { return k_bsdf_diffuse | k_bsdf_reflection; }
   float alpha(const SurfaceInteraction& si) const override { return m_alpha ? eval_alpha_texture(*m_alpha, si) : 1.f; }
   bool has_alpha() const override { return m_alpha != nullptr; }
+  uint32_t needs() const override { return m_albedo->is_constant() ? 0u : uint32_t(k_needs_footprint); }
   float alpha_cutoff() const override { return m_alpha_cutoff; }
 
  private:

@@ -65,6 +65,11 @@ inline float eval_alpha_texture(const Texture& t, const SurfaceInteraction& si) 
   return t.eval(si.uv, 0.f).x;
 }
 
+enum MaterialNeeds : uint32_t {
+  k_needs_tangent = 1u << 0,    ///< SurfaceInteraction::dpdu (anisotropy, normal maps)
+  k_needs_footprint = 1u << 1,  ///< uv footprint (filtered textures)
+};
+
 enum BsdfFlags : uint32_t {
   k_bsdf_none = 0,
   k_bsdf_diffuse = 1u << 0,
@@ -91,6 +96,10 @@ class Material {
   /// is produced (the path ends).
   virtual bool sample(const SurfaceInteraction& si, const Vec3f& wo, float u_lobe, const Vec2f& u,
                       BsdfSample* out) const = 0;
+  /// What the material reads from a SurfaceInteraction beyond position, normals and uv
+  /// (MaterialNeeds bits). The integrator skips computing what no material needs; the
+  /// default (everything) is always correct.
+  virtual uint32_t needs() const { return k_needs_tangent | k_needs_footprint; }
   /// Diffuse-equivalent reflectance for the albedo output (a denoiser feature).
   virtual Color albedo(const SurfaceInteraction& si) const = 0;
   /// Union of BsdfFlags of all lobes; materials without non-delta lobes skip light sampling.

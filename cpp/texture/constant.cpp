@@ -10,6 +10,7 @@ class ConstantTexture final : public Texture {
   explicit ConstantTexture(const Color& v) : m_value(v) {}
   Color eval(const Vec2f&, float) const override { return m_value; }
   Color average() const override { return m_value; }
+  bool is_constant() const override { return true; }
 
  private:
   Color m_value;

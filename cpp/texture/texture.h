@@ -25,6 +25,8 @@ class Texture {
     float la = axis_a.x * axis_a.x + axis_a.y * axis_a.y, lb = axis_b.x * axis_b.x + axis_b.y * axis_b.y;
     return eval(uv, std::sqrt(std::max(la, lb)));
   }
+  /// True when the value does not depend on uv (lets materials skip footprints).
+  virtual bool is_constant() const { return false; }
   /// Average value over the texture (used for light power estimates and albedo priors).
   virtual Color average() const = 0;
   /// True when the texture has an alpha channel (image files with 2 or 4+ channels).
