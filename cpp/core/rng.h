@@ -24,26 +24,89 @@ inline uint64_t mix64(uint64_t z) {
 /// Maps the high 24 bits of a 32-bit integer to a float in [0, 1).
 inline float bits_to_unit_float(uint32_t bits) { return float(bits >> 8) * 0x1p-24f; }
 
-/// Counter-based sampler for one (seed, pixel, sample) triple.
+inline uint32_t reverse_bits32(uint32_t v) {
+  v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
+  v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
+  v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
+  v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
+  return (v >> 16) | (v << 16);
+}
+
+/// Second dimension of the Sobol sequence (primitive polynomial x + 1): direction numbers
+/// v_1 = 2^31, v_{k+1} = v_k ^ (v_k >> 1). (The first dimension is the van der Corput
+/// sequence, reverse_bits32(i).)
+inline uint32_t sobol_dim1(uint32_t i) {
+  uint32_t x = 0, v = 0x80000000u;
+  for (; i; i >>= 1, v ^= v >> 1)
+    if (i & 1u) x ^= v;
+  return x;
+}
+
+/// Nested uniform (Owen) scrambling of a 32-bit fixed-point value.
+/// NOTE: Burley 2020, "Practical Hash-based Owen Scrambling", JCGT 9(4): the
+/// Laine-Karras-style hash applied to the bit-reversed value (its Listing 2 constants).
+inline uint32_t owen_scramble(uint32_t x, uint32_t seed) {
+  x = reverse_bits32(x);
+  x += seed;
+  x ^= x * 0x6c50b47cu;
+  x ^= x * 0xb82f1e52u;
+  x ^= x * 0xc7afe638u;
+  x ^= x * 0x8d22f6e6u;
+  return reverse_bits32(x);
+}
+
+/// A pseudo-random permutation of [0, n) evaluated at i, keyed by `key`.
+/// NOTE: cycle-walking over a bijective hash on the next power of two (the construction of
+/// Kensler 2013, "Correlated Multi-Jittered Sampling", sec. 3; our own bijection: xor with
+/// the key, odd multiplications and in-mask xorshifts are each invertible modulo 2^b).
+inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
+  if (n <= 1) return 0;
+  uint32_t mask = n - 1;
+  mask |= mask >> 1;
+  mask |= mask >> 2;
+  mask |= mask >> 4;
+  mask |= mask >> 8;
+  mask |= mask >> 16;
+  do {
+    i ^= key & mask;
+    i = (i * 0x9e3779b1u) & mask;
+    i ^= (i >> 3) & mask;
+    i = (i * 0x85ebca6bu) & mask;
+    i ^= ((key >> 11) & mask);
+    i ^= (i >> 7) & mask;
+    i = (i * 0xc2b2ae35u) & mask;
+    i = (i * 0x27d4eb2fu) & mask;
+    i ^= (i >> 5) & mask;
+  } while (i >= n);
+  return i;
+}
+
+/// Sampler for one (seed, pixel, sample) triple of a pixel rendered with `spp` samples.
+///
+/// Dimensions come in pairs (2k, 2k + 1); each pair is a 2D Owen-scrambled Sobol point set
+/// over the pixel's samples, with the sample order shuffled per pixel and pair ("padded"
+/// Sobol, as in pbrt-v4's PaddedSobolSampler). So every pair is stratified over the
+/// pixel's spp samples (a (0, 2)-net for powers of two) while different pairs are
+/// decorrelated. Everything is a pure function of (seed, pixel, sample, dimension, spp):
+/// images are bit-identical for any thread count or tile order.
 class PixelSampler {
  public:
-  PixelSampler() : m_key(0) {}
-  PixelSampler(uint64_t seed, uint64_t pixel_index, uint32_t sample_index)
-      : m_key(mix64(mix64(mix64(seed) ^ pixel_index) ^ sample_index)) {}
+  PixelSampler() : m_key(0), m_sample(0), m_spp(1) {}
+  PixelSampler(uint64_t seed, uint64_t pixel_index, uint32_t sample_index, uint32_t spp = 1)
+      : m_key(mix64(mix64(seed) ^ pixel_index)), m_sample(sample_index), m_spp(spp ? spp : 1) {}
 
-  /// Value of dimension `dim`, independent of the order of calls.
-  float get(uint32_t dim) const { return bits_to_unit_float(uint32_t(mix64(m_key ^ (uint64_t(dim) << 32)) >> 32)); }
-  float next_1d() { return get(m_dim++); }
-  Vec2f next_2d() {
-    float a = get(m_dim++);
-    return {a, get(m_dim++)};
+  /// Value of dimension `dim` in [0, 1), independent of the order of calls.
+  float get(uint32_t dim) const {
+    uint64_t h = mix64(m_key ^ (uint64_t(dim >> 1) * 0x9e3779b97f4a7c15ull));
+    uint32_t index = permute_index(m_sample, m_spp, uint32_t(h));
+    uint32_t x = (dim & 1u) ? sobol_dim1(index) : reverse_bits32(index);
+    x = owen_scramble(x, uint32_t(h >> 32) ^ (dim & 1u ? 0x68bc21ebu : 0u));
+    return bits_to_unit_float(x);
   }
-  /// Jumps to a fixed dimension, so that each path vertex uses a stable block of dimensions.
-  void set_dimension(uint32_t dim) { m_dim = dim; }
 
  private:
   uint64_t m_key;
-  uint32_t m_dim = 0;
+  uint32_t m_sample, m_spp;
 };
 
 /// Small sequential generator (PCG32, O'Neill 2014) for tests and scene-building code.

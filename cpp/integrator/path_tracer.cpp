@@ -24,8 +24,10 @@ void RenderSettings::validate() const {
 
 namespace {
 
-// Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex.
-constexpr uint32_t k_dims_per_vertex = 7;
+// Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex:
+// (+0, +1) light position, (+2, +3) BSDF direction — the 2D-stratified pairs of
+// PixelSampler — then +4 light choice, +5 BSDF lobe, +6 Russian roulette.
+constexpr uint32_t k_dims_per_vertex = 8;
 
 struct PathCounters {
   uint64_t rays = 0;
@@ -113,11 +115,11 @@ class PathTracer {
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
     if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
       float pick_pmf;
-      size_t li = sc.light_pick.sample(sampler.get(base), &pick_pmf);
+      size_t li = sc.light_pick.sample(sampler.get(base + 4), &pick_pmf);
       const Light* light = sc.lights[li];
       LightSample ls;
       LightSampleContext ctx{si.p, si.p_error};
-      if (light->sample(ctx, Vec2f(sampler.get(base + 1), sampler.get(base + 2)), &ls)) {
+      if (light->sample(ctx, Vec2f(sampler.get(base), sampler.get(base + 1)), &ls)) {
         Color f = mat->eval(si, wo, ls.wi);
         if (!is_black(f)) {
           shadow->o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
@@ -139,7 +141,7 @@ class PathTracer {
 
     // BSDF sampling.
     BsdfSample bs;
-    if (!mat->sample(si, wo, sampler.get(base + 3), Vec2f(sampler.get(base + 4), sampler.get(base + 5)), &bs)) {
+    if (!mat->sample(si, wo, sampler.get(base + 5), Vec2f(sampler.get(base + 2), sampler.get(base + 3)), &bs)) {
       st.active = false;
       return shadow_requested;
     }
@@ -178,7 +180,7 @@ class PathTracer {
     PathState st[W];
     PixelSampler samplers[W];
     for (uint32_t i = 0; i < uint32_t(W); ++i) {
-      samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i);
+      samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_s.spp);
       if (i >= n) {
         st[i].active = false;
         continue;

@@ -1,0 +1,91 @@
+// PixelSampler (core/rng.h): padded, Owen-scrambled Sobol sample values.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "chi2.h"
+#include "core/rng.h"
+
+using namespace sg;
+
+TEST(rng, permute_index_is_a_permutation) {
+  for (uint32_t n : {1u, 2u, 3u, 7u, 16u, 33u, 1000u})
+    for (uint32_t key : {0u, 1u, 0xdeadbeefu}) {
+      std::set<uint32_t> seen;
+      for (uint32_t i = 0; i < n; ++i) {
+        uint32_t p = permute_index(i, n, key);
+        ASSERT_LT(p, n);
+        seen.insert(p);
+      }
+      EXPECT_EQ(seen.size(), n) << "n=" << n << " key=" << key;
+    }
+}
+
+TEST(rng, sobol_dim1_first_points) {
+  // Second Sobol dimension (direction numbers 1/2, 3/4, 5/8, ...), natural order.
+  const double expect[] = {0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875};
+  for (uint32_t i = 0; i < 8; ++i) EXPECT_DOUBLE_EQ(sobol_dim1(i) * 0x1p-32, expect[i]) << i;
+}
+
+// Every pair of dimensions of a pixel's spp samples is a (0, 2)-net in base 2 for
+// power-of-two spp: each elementary interval of area 1/spp holds exactly one point.
+TEST(rng, each_dimension_pair_is_stratified_over_the_pixel) {
+  const uint32_t spp = 64;
+  for (uint64_t pixel : {0ull, 17ull, 123456ull})
+    for (uint32_t pair = 0; pair < 6; ++pair) {
+      std::vector<std::pair<float, float>> pts;
+      for (uint32_t s = 0; s < spp; ++s) {
+        PixelSampler ps(7, pixel, s, spp);
+        pts.push_back({ps.get(2 * pair), ps.get(2 * pair + 1)});
+      }
+      for (uint32_t bx = 1; bx <= spp; bx *= 2) {
+        uint32_t by = spp / bx;
+        std::vector<int> cells(spp, 0);
+        for (auto& p : pts) {
+          uint32_t cx = std::min(bx - 1, uint32_t(p.first * bx)), cy = std::min(by - 1, uint32_t(p.second * by));
+          ++cells[cy * bx + cx];
+        }
+        EXPECT_TRUE(std::all_of(cells.begin(), cells.end(), [](int c) { return c == 1; }))
+            << "pixel " << pixel << " pair " << pair << " intervals " << bx << "x" << by;
+      }
+    }
+}
+
+// Across pixels, every dimension is uniform (chi-square, 10^6 values) and dimensions of
+// different pairs are uncorrelated.
+TEST(rng, values_are_uniform_and_pairs_decorrelated) {
+  const uint32_t spp = 16, bins = 100;
+  for (uint32_t dim : {0u, 1u, 5u, 12u, 33u}) {
+    std::vector<double> obs(bins, 0.0), exp(bins, 0.0);
+    double corr = 0.0, n = 0.0;
+    for (uint64_t pixel = 0; pixel < 62500; ++pixel)
+      for (uint32_t s = 0; s < spp; ++s) {
+        PixelSampler ps(3, pixel, s, spp);
+        float u = ps.get(dim);
+        ASSERT_GE(u, 0.f);
+        ASSERT_LT(u, 1.f);
+        obs[std::min(bins - 1, uint32_t(u * bins))] += 1.0;
+        corr += (u - 0.5) * (ps.get(dim + 2) - 0.5);
+        n += 1.0;
+      }
+    for (auto& e : exp) e = n / bins;
+    sgtest::Chi2Result res = sgtest::chi2_test(obs, exp);
+    EXPECT_TRUE(res.ok) << "dimension " << dim << ": " << res.message;
+    // Correlation coefficient of uniform variables: cov / (1/12); |r| < 5 sigma.
+    double r = (corr / n) * 12.0;
+    EXPECT_LT(std::fabs(r), 5.0 / std::sqrt(n)) << "dimensions " << dim << ", " << dim + 2;
+  }
+}
+
+TEST(rng, deterministic_and_seed_dependent) {
+  PixelSampler a(1, 99, 5, 32), b(1, 99, 5, 32), c(2, 99, 5, 32);
+  int differ = 0;
+  for (uint32_t d = 0; d < 40; ++d) {
+    EXPECT_EQ(a.get(d), b.get(d));
+    differ += a.get(d) != c.get(d);
+  }
+  EXPECT_GT(differ, 30);
+}
