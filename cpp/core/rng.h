@@ -42,6 +42,24 @@ inline uint32_t sobol_dim1(uint32_t i) {
   return x;
 }
 
+/// reverse_bits32(sobol_dim1(i)), computed directly with bit-reversed direction numbers.
+inline uint32_t sobol_dim1_reversed(uint32_t i) {
+  uint32_t x = 0, v = 1u;
+  for (; i; i >>= 1, v ^= v << 1)
+    if (i & 1u) x ^= v;
+  return x;
+}
+
+/// The hash of Burley 2020 applied to bit-reversed input (see owen_scramble).
+inline uint32_t laine_karras(uint32_t x, uint32_t seed) {
+  x += seed;
+  x ^= x * 0x6c50b47cu;
+  x ^= x * 0xb82f1e52u;
+  x ^= x * 0xc7afe638u;
+  x ^= x * 0x8d22f6e6u;
+  return x;
+}
+
 /// Nested uniform (Owen) scrambling of a 32-bit fixed-point value.
 /// NOTE: Burley 2020, "Practical Hash-based Owen Scrambling", JCGT 9(4): the
 /// Laine-Karras-style hash applied to the bit-reversed value (its Listing 2 constants).
@@ -67,16 +85,14 @@ inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
   mask |= mask >> 4;
   mask |= mask >> 8;
   mask |= mask >> 16;
+  uint32_t k1 = key & mask, k2 = (key >> 16) & mask;
   do {
-    i ^= key & mask;
+    i ^= k1;
     i = (i * 0x9e3779b1u) & mask;
-    i ^= (i >> 3) & mask;
+    i ^= i >> 4;
+    i ^= k2;
     i = (i * 0x85ebca6bu) & mask;
-    i ^= ((key >> 11) & mask);
-    i ^= (i >> 7) & mask;
-    i = (i * 0xc2b2ae35u) & mask;
-    i = (i * 0x27d4eb2fu) & mask;
-    i ^= (i >> 5) & mask;
+    i ^= i >> 3;
   } while (i >= n);
   return i;
 }
@@ -97,11 +113,26 @@ class PixelSampler {
 
   /// Value of dimension `dim` in [0, 1), independent of the order of calls.
   float get(uint32_t dim) const {
+    Vec2f p = get_2d(dim & ~1u);
+    return (dim & 1u) ? p.y : p.x;
+  }
+
+  /// An unstratified value for dimension `dim` (a plain hash; for decisions such as
+  /// Russian roulette that gain nothing from stratification and are on the hot path).
+  float get_independent(uint32_t dim) const {
+    return bits_to_unit_float(uint32_t(mix64(m_key ^ (uint64_t(m_sample) << 32) ^ (0x51ed27u + dim)) >> 32));
+  }
+
+  /// Dimensions (dim, dim + 1) for an even `dim`: one 2D point of the pair's net.
+  /// NOTE: owen_scramble(reverse(i)) = reverse(laine_karras(i)), and likewise with the
+  /// bit-reversed Sobol direction numbers, so each coordinate costs one bit reversal.
+  Vec2f get_2d(uint32_t dim) const {
     uint64_t h = mix64(m_key ^ (uint64_t(dim >> 1) * 0x9e3779b97f4a7c15ull));
     uint32_t index = permute_index(m_sample, m_spp, uint32_t(h));
-    uint32_t x = (dim & 1u) ? sobol_dim1(index) : reverse_bits32(index);
-    x = owen_scramble(x, uint32_t(h >> 32) ^ (dim & 1u ? 0x68bc21ebu : 0u));
-    return bits_to_unit_float(x);
+    uint32_t seed = uint32_t(h >> 32);
+    uint32_t x = reverse_bits32(laine_karras(index, seed));
+    uint32_t y = reverse_bits32(laine_karras(sobol_dim1_reversed(index), seed ^ 0x68bc21ebu));
+    return {bits_to_unit_float(x), bits_to_unit_float(y)};
   }
 
  private:

@@ -26,7 +26,8 @@ namespace {
 
 // Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex:
 // (+0, +1) light position, (+2, +3) BSDF direction — the 2D-stratified pairs of
-// PixelSampler — then +4 light choice, +5 BSDF lobe, +6 Russian roulette.
+// PixelSampler — then +4 light choice, +5 BSDF lobe (a pair too), +6 Russian roulette
+// (unstratified).
 constexpr uint32_t k_dims_per_vertex = 8;
 
 struct PathCounters {
@@ -110,16 +111,17 @@ class PathTracer {
       return false;
     }
     uint32_t base = 2 + st.bounce * k_dims_per_vertex;
+    const Vec2f u_pick_lobe = sampler.get_2d(base + 4);  // light choice, BSDF lobe
 
     // Next-event estimation: sample a light, defer the shadow ray.
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
     if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
       float pick_pmf;
-      size_t li = sc.light_pick.sample(sampler.get(base + 4), &pick_pmf);
+      size_t li = sc.light_pick.sample(u_pick_lobe.x, &pick_pmf);
       const Light* light = sc.lights[li];
       LightSample ls;
       LightSampleContext ctx{si.p, si.p_error};
-      if (light->sample(ctx, Vec2f(sampler.get(base), sampler.get(base + 1)), &ls)) {
+      if (light->sample(ctx, sampler.get_2d(base), &ls)) {
         Color f = mat->eval(si, wo, ls.wi);
         if (!is_black(f)) {
           shadow->o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
@@ -141,7 +143,7 @@ class PathTracer {
 
     // BSDF sampling.
     BsdfSample bs;
-    if (!mat->sample(si, wo, sampler.get(base + 5), Vec2f(sampler.get(base + 2), sampler.get(base + 3)), &bs)) {
+    if (!mat->sample(si, wo, u_pick_lobe.y, sampler.get_2d(base + 2), &bs)) {
       st.active = false;
       return shadow_requested;
     }
@@ -160,7 +162,7 @@ class PathTracer {
     // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
     if (st.segments > m_s.rr_depth) {
       float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
-      if (sampler.get(base + 6) < q) {
+      if (sampler.get_independent(base + 6) < q) {
         st.active = false;
         return shadow_requested;
       }
@@ -185,7 +187,10 @@ class PathTracer {
         st[i].active = false;
         continue;
       }
-      st[i].ray = sc.camera.generate_ray(float(x) + samplers[i].get(0), float(y) + samplers[i].get(1));
+      {
+        Vec2f j = samplers[i].get_2d(0);
+        st[i].ray = sc.camera.generate_ray(float(x) + j.x, float(y) + j.y);
+      }
       st[i].cone_spread = m_pixel_spread * camera_sample_spread_scale(m_s.spp);
     }
     for (;;) {
