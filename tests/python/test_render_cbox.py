@@ -13,11 +13,13 @@ Criteria (run `pytest -s` to see the figures):
      variance as ours - E[ours] and is uncorrelated with it; h^2 is averaged over a 5x5
      neighbourhood (~24 degrees of freedom) and scaled by (1 + 2 SPP / 4096) for the reference's
      own path-tracing noise (same per-sample variance, 4096 samples).
-   * Var(ours) at max_depth 1: exact. With one constant emitter and no bounce, every camera
-     sample returns either exactly the emitted radiance L or 0 (checked: pixels are multiples
-     of L / SPP), so a pixel is L k / n with k ~ Binomial(n, p), p = ref / L, and
-     Var = L^2 p (1 - p) / n (p floored at 0.5 / 4096, the reference's resolution). Only pixels
-     where ref or ours is non-zero are scored.
+   * Var(ours) at max_depth 1: an upper bound. With one constant emitter and no bounce, every
+     camera sample returns either exactly the emitted radiance L or 0 (checked: pixels are
+     multiples of L / SPP), so with independent samples a pixel is L k / n with
+     k ~ Binomial(n, p), p = ref / L, and Var = L^2 p (1 - p) / n (p floored at 0.5 / 4096, the
+     reference's resolution). synthgen's pixel positions are stratified (Sobol, core/rng.h), so
+     the true variance is lower and z is smaller than under this model: at max_depth 1 only the
+     upper bounds apply. Only pixels where ref or ours is non-zero are scored.
    * Var(ref) additionally contains (eps * ref)^2: the Ignis references carry colour noise even
      where the true value is constant (their luminaire interior scatters around L; eps is the
      relative standard deviation there, measured from the d1 reference and printed).
@@ -157,7 +159,8 @@ def test_cbox_matches_ignis_reference(depth, ref_noise):
           f"max|z| = {np.abs(zb).max():.2f}")
 
     assert np.all(np.abs(rel) < 0.01), f"mean radiance differs from the reference by {100 * rel} %"
-    assert 0.4 <= mean_abs_z <= 1.0, f"mean|z| = {mean_abs_z:.3f} inconsistent with Monte Carlo noise"
+    lower = 0.4 if depth != 1 else 0.0  # max_depth 1: Binomial variance is an upper bound
+    assert lower <= mean_abs_z <= 1.0, f"mean|z| = {mean_abs_z:.3f} inconsistent with Monte Carlo noise"
     assert frac4 <= 0.01, f"{100 * frac4:.3f} % of pixels have |z| > 4"
     assert zero_var_err <= 1e-6 * max(1.0, float(ref.max())), "noise-free pixels differ from the reference"
     assert np.abs(zb).max() < 5.0, f"regional bias: block z up to {np.abs(zb).max():.2f}"
