@@ -116,6 +116,11 @@ class ConductorMaterial final : public Material {
   Color albedo(const SurfaceInteraction& si) const override { return fresnel(1.f) * tint(si); }
 
   uint32_t flags() const override { return (m_smooth ? k_bsdf_delta : k_bsdf_glossy) | k_bsdf_reflection; }
+  uint32_t needs() const override {
+    // Isotropic roughness does not depend on the tangent's direction (any frame around ns).
+    return (m_ggx.ax != m_ggx.ay ? uint32_t(k_needs_tangent) : 0u) |
+           (m_tint->is_constant() ? 0u : uint32_t(k_needs_footprint));
+  }
 
  private:
   Color fresnel(float cos_i) const { return m_perfect ? Color(1.f) : fresnel_conductor(cos_i, m_eta, m_k); }

@@ -40,6 +40,9 @@ struct SurfaceInteraction {
 
   /// Local shading frame: s = dpdu, t = ns x dpdu, n = ns.
   Frame shading_frame() const {
+    // dpdu is left zero when the material declared it does not need a tangent
+    // (Material::needs): any frame around ns is then correct.
+    if (dpdu.x == 0.f && dpdu.y == 0.f && dpdu.z == 0.f) return Frame(ns);
     Frame f;
     f.n = ns;
     f.s = dpdu;

@@ -90,6 +90,9 @@ class MixMaterial final : public Material {
   }
 
   uint32_t flags() const override { return m_flags; }
+  uint32_t needs() const override {
+    return m_a->needs() | m_b->needs() | ((m_mask && !m_mask->is_constant()) ? uint32_t(k_needs_footprint) : 0u);
+  }
 
   Color emission(const SurfaceInteraction& si, const Vec3f& wo) const override {
     if (!m_emissive) return Color(0.f);
