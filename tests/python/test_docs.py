@@ -17,3 +17,12 @@ def test_readme_starts_with_the_two_setup_commands():
     lines = [l.strip() for l in (ROOT / "README.md").read_text().splitlines() if l.strip()]
     code = lines[lines.index("```sh") + 1:lines.index("```sh") + 3]
     assert code[0].startswith("make demo") and code[1].startswith("make test")
+
+
+def test_python_api_reference_is_current():
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "gen_api_doc.py"), "--check"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
