@@ -276,7 +276,9 @@ void scatter_hits(const RH& rh, const int* lanes, int n, HitPacket* hits) {
 }  // namespace
 
 // NOTE: active lanes are compacted; when at most 8 remain, the 8-wide Embree kernel is
-// used (a 16-wide traversal costs the same for 5 rays as for 16).
+// used (a 16-wide traversal costs the same for 5 rays as for 16), and a packet query costs
+// about as much as a few single-ray queries, so at most 3 lanes are traced as single rays
+// (measured with bench/embree_cbox.py).
 void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
   int lanes[k_packet_size];
   int n = 0;
@@ -285,6 +287,10 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
     if (rays.valid[i]) lanes[n++] = i;
   }
   if (n == 0) return;
+  if (n <= 3) {
+    for (int k = 0; k < n; ++k) hits->found[lanes[k]] = intersect(rays.get(lanes[k]), &hits->hit[lanes[k]]);
+    return;
+  }
   QueryContext ctx;
   init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   if (n <= 8) {
@@ -320,6 +326,10 @@ void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size])
     if (rays.valid[i]) lanes[n++] = i;
   }
   if (n == 0) return;
+  if (n <= 3) {
+    for (int k = 0; k < n; ++k) occluded[lanes[k]] = this->occluded(rays.get(lanes[k]));
+    return;
+  }
   QueryContext ctx;
   init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   if (n <= 8) {

@@ -33,6 +33,13 @@ struct RayPacket {
     t_max[i] = r.t_max;
     valid[i] = -1;
   }
+  Ray get(int i) const {
+    Ray r;
+    r.o = Vec3f(ox[i], oy[i], oz[i]);
+    r.d = Vec3f(dx[i], dy[i], dz[i]);
+    r.t_max = t_max[i];
+    return r;
+  }
 };
 
 struct HitPacket {
@@ -72,7 +79,8 @@ class Accel {
 
   bool intersect(const Ray& ray, RayHit* hit) const;
   bool occluded(const Ray& ray) const;
-  /// Packet versions: identical results per lane to intersect() / occluded().
+  /// Packet versions: identical results per lane to intersect() / occluded(). Sparse
+  /// packets (at most 3 active lanes) are traced as single rays.
   void intersect_packet(const RayPacket& rays, HitPacket* hits) const;
   void occluded_packet(const RayPacket& rays, bool occluded[k_packet_size]) const;
 

@@ -57,7 +57,10 @@ struct PathState {
 class PathTracer {
  public:
   PathTracer(const RenderScene& scene, const RenderSettings& settings)
-      : m_scene(scene), m_s(settings), m_pixel_spread(settings.texture_filtering ? pixel_spread_angle(scene.camera) : 0.f) {}
+      : m_scene(scene),
+        m_s(settings),
+        m_pixel_spread(settings.texture_filtering ? pixel_spread_angle(scene.camera) : 0.f),
+        m_sample_spread(m_pixel_spread * camera_sample_spread_scale(settings.spp)) {}
 
   /// The current ray escaped: infinite lights, MIS-weighted against light sampling.
   void on_miss(PathState& st) const {
@@ -191,7 +194,7 @@ class PathTracer {
         Vec2f j = samplers[i].get_2d(0);
         st[i].ray = sc.camera.generate_ray(float(x) + j.x, float(y) + j.y);
       }
-      st[i].cone_spread = m_pixel_spread * camera_sample_spread_scale(m_s.spp);
+      st[i].cone_spread = m_sample_spread;
     }
     for (;;) {
       RayPacket rays;
@@ -206,16 +209,7 @@ class PathTracer {
       }
       if (!n_active) break;
       HitPacket hp;
-      // NOTE: a packet query costs about as much as a few single-ray queries, so sparse
-      // packets (spp < 4, or the long tail of paths) use single rays.
-      if (n_active <= 3) {
-        for (int i = 0; i < W; ++i) {
-          hp.found[i] = false;
-          if (st[i].active) hp.found[i] = sc.accel->intersect(st[i].ray, &hp.hit[i]);
-        }
-      } else {
-        sc.accel->intersect_packet(rays, &hp);
-      }
+      sc.accel->intersect_packet(rays, &hp);
       counters.rays += n_active;
       RayPacket shadows;
       uint32_t n_shadow = 0;
@@ -234,20 +228,7 @@ class PathTracer {
       }
       if (n_shadow) {
         bool occluded[W];
-        if (n_shadow <= 3) {
-          for (int i = 0; i < W; ++i) {
-            occluded[i] = false;
-            if (shadows.valid[i]) {
-              Ray r;
-              r.o = Vec3f(shadows.ox[i], shadows.oy[i], shadows.oz[i]);
-              r.d = Vec3f(shadows.dx[i], shadows.dy[i], shadows.dz[i]);
-              r.t_max = shadows.t_max[i];
-              occluded[i] = sc.accel->occluded(r);
-            }
-          }
-        } else {
-          sc.accel->occluded_packet(shadows, occluded);
-        }
+        sc.accel->occluded_packet(shadows, occluded);
         counters.rays += n_shadow;
         for (int i = 0; i < W; ++i)
           if (shadows.valid[i] && !occluded[i]) st[i].L += st[i].shadow_contrib;
@@ -296,7 +277,8 @@ class PathTracer {
  private:
   const RenderScene& m_scene;
   const RenderSettings& m_s;
-  float m_pixel_spread;  ///< camera cone spread angle (0 without texture filtering)
+  float m_pixel_spread;   ///< camera cone spread angle (0 without texture filtering)
+  float m_sample_spread;  ///< spread of one path sample's camera cone
 };
 
 }  // namespace

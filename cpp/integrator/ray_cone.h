@@ -33,22 +33,38 @@ inline float pixel_spread_angle(const PinholeCamera& camera) {
   return std::atan(1.f / std::min(camera.fx, camera.fy));
 }
 
-/// sqrt(uv area / world area) of triangle `prim` of `inst` (world area after the instance
-/// transform). Meshes without uvs use the barycentric parameterization (uv area 1/2).
-/// Returns 0 for a degenerate uv mapping (the lookup is then a point sample).
-inline float uv_per_world_length(const InstanceRecord& inst, uint32_t prim) {
+/// World-space edges and uv edges of triangle `prim` of `inst` (after the instance
+/// transform), read once per hit and shared by the footprint computations below. Meshes
+/// without uvs use the barycentric parameterization (uv edges (1, 0) and (0, 1)).
+struct ConeTriangle {
+  Vec3f e1, e2;
+  Vec2f u1{1.f, 0.f}, u2{0.f, 1.f};
+};
+
+inline ConeTriangle cone_triangle(const InstanceRecord& inst, uint32_t prim) {
   const TriangleMesh& m = *inst.mesh;
   uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
   const Transform& T = inst.world_from_object;
-  float world2 = length(cross(T.apply_vector(m.positions[i1] - m.positions[i0]),
-                              T.apply_vector(m.positions[i2] - m.positions[i0])));
-  float uv2 = 1.f;  // twice the area of the barycentric triangle
+  ConeTriangle t;
+  t.e1 = T.apply_vector(m.positions[i1] - m.positions[i0]);
+  t.e2 = T.apply_vector(m.positions[i2] - m.positions[i0]);
   if (!m.uvs.empty()) {
-    Vec2f a = m.uvs[i1] - m.uvs[i0], b = m.uvs[i2] - m.uvs[i0];
-    uv2 = std::fabs(a.x * b.y - a.y * b.x);
+    t.u1 = m.uvs[i1] - m.uvs[i0];
+    t.u2 = m.uvs[i2] - m.uvs[i0];
   }
+  return t;
+}
+
+/// sqrt(uv area / world area) of the triangle (uv area 1/2 without uvs). Returns 0 for a
+/// degenerate uv mapping (the lookup is then a point sample).
+inline float uv_per_world_length(const ConeTriangle& t) {
+  float world2 = length(cross(t.e1, t.e2));
+  float uv2 = std::fabs(t.u1.x * t.u2.y - t.u1.y * t.u2.x);  // twice the uv area
   float r = std::sqrt(uv2 / world2);
   return std::isfinite(r) ? r : 0.f;
+}
+inline float uv_per_world_length(const InstanceRecord& inst, uint32_t prim) {
+  return uv_per_world_length(cone_triangle(inst, prim));
 }
 
 /// Texture-space footprint width of a cone of width `cone_width` arriving along unit
@@ -69,19 +85,12 @@ inline float ray_cone_uv_footprint(float cone_width, const Vec3f& ng, const Vec3
 /// tangent vectors are mapped to uv through the triangle's affine parameterization
 /// v = alpha e1 + beta e2 -> alpha duv1 + beta duv2 (pbrt-v4 sec. 6.5.3 solves the same
 /// 2x2 system for dp/du, dp/dv), which is exact for any (also stretched) uv mapping.
-inline bool ray_cone_uv_ellipse(const InstanceRecord& inst, uint32_t prim, const Vec3f& ng, const Vec3f& d,
-                                float cone_width, Vec2f* axis_a, Vec2f* axis_b) {
+inline bool ray_cone_uv_ellipse(const ConeTriangle& tri, const Vec3f& ng, const Vec3f& d, float cone_width,
+                                Vec2f* axis_a, Vec2f* axis_b) {
   float cos_theta = std::fabs(dot(ng, d));
   if (!(cone_width > 0.f) || !(cos_theta > 1e-6f)) return false;
-  const TriangleMesh& m = *inst.mesh;
-  uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
-  const Transform& T = inst.world_from_object;
-  Vec3f e1 = T.apply_vector(m.positions[i1] - m.positions[i0]), e2 = T.apply_vector(m.positions[i2] - m.positions[i0]);
-  Vec2f u1(1.f, 0.f), u2(0.f, 1.f);  // barycentric parameterization without uvs
-  if (!m.uvs.empty()) {
-    u1 = m.uvs[i1] - m.uvs[i0];
-    u2 = m.uvs[i2] - m.uvs[i0];
-  }
+  const Vec3f &e1 = tri.e1, &e2 = tri.e2;
+  const Vec2f &u1 = tri.u1, &u2 = tri.u2;
   float g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
   float det = g11 * g22 - g12 * g12;
   if (!(det > 0.f)) return false;
@@ -99,14 +108,19 @@ inline bool ray_cone_uv_ellipse(const InstanceRecord& inst, uint32_t prim, const
   return std::isfinite(axis_a->x) && std::isfinite(axis_a->y) && std::isfinite(axis_b->x) &&
          std::isfinite(axis_b->y);
 }
+inline bool ray_cone_uv_ellipse(const InstanceRecord& inst, uint32_t prim, const Vec3f& ng, const Vec3f& d,
+                                float cone_width, Vec2f* axis_a, Vec2f* axis_b) {
+  return ray_cone_uv_ellipse(cone_triangle(inst, prim), ng, d, cone_width, axis_a, axis_b);
+}
 
 /// Sets the texture footprint of `si` (hit of triangle `prim` of `inst` along unit
 /// direction `d`) for a cone of width `cone_width` there: the isotropic width of eq. (34)
 /// and the anisotropic ellipse.
 inline void set_ray_cone_footprint(SurfaceInteraction* si, const InstanceRecord& inst, uint32_t prim, const Vec3f& d,
                                    float cone_width) {
-  si->uv_footprint = ray_cone_uv_footprint(cone_width, si->ng, d, uv_per_world_length(inst, prim));
-  if (!ray_cone_uv_ellipse(inst, prim, si->ng, d, cone_width, &si->uv_axis_a, &si->uv_axis_b))
+  ConeTriangle tri = cone_triangle(inst, prim);
+  si->uv_footprint = ray_cone_uv_footprint(cone_width, si->ng, d, uv_per_world_length(tri));
+  if (!ray_cone_uv_ellipse(tri, si->ng, d, cone_width, &si->uv_axis_a, &si->uv_axis_b))
     si->uv_axis_a = si->uv_axis_b = Vec2f(0.f, 0.f);
 }
 

@@ -79,11 +79,11 @@ class ConductorMaterial final : public Material {
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
     Frame f;
     float side;
-    if (!local_frame(si, wo, &f, &side)) return false;
-    Vec3f lo = to_local(f, side, wo);
+    if (!sided_frame(si, wo, &f, &side)) return false;
+    Vec3f lo = sided_to_local(f, side, wo);
     if (lo.z <= 0.f) return false;
     if (m_smooth) {
-      Vec3f wi = normalize(to_world(f, side, Vec3f(-lo.x, -lo.y, lo.z)));
+      Vec3f wi = normalize(sided_to_world(f, side, Vec3f(-lo.x, -lo.y, lo.z)));
       if (dot(si.ng, wi) * side <= 0.f) return false;
       out->wi = wi;
       out->weight = fresnel(lo.z) * tint(si);
@@ -95,7 +95,7 @@ class ConductorMaterial final : public Material {
     Vec3f m = m_ggx.sample_visible(lo, u);
     Vec3f li = reflect(lo, m);
     if (li.z <= 0.f) return false;
-    Vec3f wi = normalize(to_world(f, side, li));
+    Vec3f wi = normalize(sided_to_world(f, side, li));
     // The pdf and the weight come from evaluate() on (wo, wi), exactly as eval() and pdf()
     // compute them (half vector recomputed from the two directions). Mathematically the
     // weight is F G2 / G1(wo) (Heitz & d'Eon 2014, "Importance Sampling Microfacet-Based
@@ -154,34 +154,15 @@ class ConductorMaterial final : public Material {
     return c > 0.f ? m_ggx.pdf_visible(lo, h) / (4.f * c) : 0.f;
   }
 
-  /// Shading frame (s = dpdu, t = ns x dpdu, n = ns) and the side of wo relative to the
-  /// geometric normal; false when wo lies in the geometric plane.
-  static bool local_frame(const SurfaceInteraction& si, const Vec3f& wo, Frame* f, float* side) {
-    float c = dot(si.ng, wo);
-    if (!(c != 0.f)) return false;
-    *side = c > 0.f ? 1.f : -1.f;
-    *f = si.shading_frame();
-    return true;
-  }
-  // The frame is mirrored (z -> -z) for wo below the surface: GGX is symmetric in x and y,
-  // so the anisotropy axes keep following dpdu on both faces.
-  static Vec3f to_local(const Frame& f, float side, const Vec3f& v) {
-    Vec3f l = f.to_local(v);
-    l.z *= side;
-    return l;
-  }
-  static Vec3f to_world(const Frame& f, float side, const Vec3f& l) {
-    return f.to_world(Vec3f(l.x, l.y, l.z * side));
-  }
   /// Both directions in the (mirrored) local frame; false unless both lie on the side of
   /// wo, above the geometric and the shading surface.
   static bool local_pair(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, Vec3f* lo, Vec3f* li) {
     Frame f;
     float side;
-    if (!local_frame(si, wo, &f, &side)) return false;
+    if (!sided_frame(si, wo, &f, &side)) return false;
     if (dot(si.ng, wi) * side <= 0.f) return false;
-    *lo = to_local(f, side, wo);
-    *li = to_local(f, side, wi);
+    *lo = sided_to_local(f, side, wo);
+    *li = sided_to_local(f, side, wi);
     return lo->z > 0.f && li->z > 0.f;
   }
 

@@ -87,8 +87,8 @@ class DielectricMaterial final : public Material {
               BsdfSample* out) const override {
     float side;
     Frame f;
-    if (!local_frame(si, wo, &f, &side)) return false;
-    Vec3f lo = to_local(f, side, wo);
+    if (!sided_frame(si, wo, &f, &side)) return false;
+    Vec3f lo = sided_to_local(f, side, wo);
     if (lo.z <= 0.f) return false;
     float eta = side > 0.f ? m_eta : 1.f / m_eta;  // eta_t / eta_o for a refraction
     Vec3f li;
@@ -118,7 +118,7 @@ class DielectricMaterial final : public Material {
         out->flags = k_bsdf_delta | k_bsdf_transmission;
         out->eta = eta;
       }
-      Vec3f wi = normalize(to_world(f, side, li));
+      Vec3f wi = normalize(sided_to_world(f, side, li));
       if (dot(si.ng, wi) * side * li.z <= 0.f) return false;  // geometric side must agree
       out->wi = wi;
       return true;
@@ -152,7 +152,7 @@ class DielectricMaterial final : public Material {
     }
     // The pdf and weight come from evaluate() on (wo, wi) (the half vector recomputed from
     // the two directions), exactly as eval() and pdf() compute them.
-    Vec3f wi = normalize(to_world(f, side, li));
+    Vec3f wi = normalize(sided_to_world(f, side, li));
     Color fv;
     float pdf;
     if (!evaluate(si, wo, wi, &fv, &pdf) || !(pdf > 0.f)) return false;
@@ -187,31 +187,16 @@ class DielectricMaterial final : public Material {
 
   Color transmittance(const SurfaceInteraction& si) const { return eval_texture(*m_transmittance, si); }
 
-  static bool local_frame(const SurfaceInteraction& si, const Vec3f& wo, Frame* f, float* side) {
-    float c = dot(si.ng, wo);
-    if (!(c != 0.f)) return false;
-    *side = c > 0.f ? 1.f : -1.f;
-    *f = si.shading_frame();
-    return true;
-  }
-  static Vec3f to_local(const Frame& f, float side, const Vec3f& v) {
-    Vec3f l = f.to_local(v);
-    l.z *= side;
-    return l;
-  }
-  static Vec3f to_world(const Frame& f, float side, const Vec3f& l) {
-    return f.to_world(Vec3f(l.x, l.y, l.z * side));
-  }
 
   bool make_local(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, Local* l) const {
     Frame f;
     float side;
-    if (!local_frame(si, wo, &f, &side)) return false;
+    if (!sided_frame(si, wo, &f, &side)) return false;
     float ci_g = dot(si.ng, wi) * side;
     if (ci_g == 0.f) return false;
     l->reflect = ci_g > 0.f;
-    l->wo = to_local(f, side, wo);
-    l->wi = to_local(f, side, wi);
+    l->wo = sided_to_local(f, side, wo);
+    l->wi = sided_to_local(f, side, wi);
     if (l->wo.z <= 0.f) return false;
     if (l->reflect ? l->wi.z <= 0.f : l->wi.z >= 0.f) return false;  // shading side must agree
     l->eta = side > 0.f ? m_eta : 1.f / m_eta;

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/math.h"
+#include "material/material.h"
 
 namespace sg {
 
@@ -120,6 +121,26 @@ inline float fresnel_conductor(float cos_i, float eta, float k) {
 inline Color fresnel_conductor(float cos_i, const Color& eta, const Color& k) {
   return {fresnel_conductor(cos_i, eta.x, k.x), fresnel_conductor(cos_i, eta.y, k.y),
           fresnel_conductor(cos_i, eta.z, k.z)};
+}
+
+/// Shading frame (s = dpdu, t = ns x dpdu, n = ns) of a two-sided microfacet BSDF and the
+/// side of wo relative to the geometric normal; false when wo lies in the geometric plane.
+inline bool sided_frame(const SurfaceInteraction& si, const Vec3f& wo, Frame* f, float* side) {
+  float c = dot(si.ng, wo);
+  if (!(c != 0.f)) return false;
+  *side = c > 0.f ? 1.f : -1.f;
+  *f = si.shading_frame();
+  return true;
+}
+/// The frame is mirrored (z -> -z) for wo below the surface: GGX is symmetric in x and y,
+/// so anisotropy axes keep following dpdu on both faces.
+inline Vec3f sided_to_local(const Frame& f, float side, const Vec3f& v) {
+  Vec3f l = f.to_local(v);
+  l.z *= side;
+  return l;
+}
+inline Vec3f sided_to_world(const Frame& f, float side, const Vec3f& l) {
+  return f.to_world(Vec3f(l.x, l.y, l.z * side));
 }
 
 /// Mirror reflection of w about n.

@@ -57,6 +57,7 @@
 #include <mutex>
 #include <string>
 
+#include "core/quadrature.h"
 #include "core/sampling.h"
 #include "material/material_registry.h"
 #include "material/microfacet.h"
@@ -75,31 +76,6 @@ inline float schlick_weight(float c) {
   return x2 * x2 * x;
 }
 
-/// Gauss-Legendre nodes and weights on [-1, 1] (NOTE: Numerical Recipes, 3rd ed., sec. 4.6,
-/// gauleg; the same construction as in coated.cpp).
-template <int N>
-struct GaussLegendre {
-  std::array<double, N> x{}, w{};
-  GaussLegendre() {
-    for (int i = 0; i < N; ++i) {
-      double z = std::cos(3.14159265358979323846 * (i + 0.75) / (N + 0.5)), dp = 1.0;
-      for (int it = 0; it < 100; ++it) {
-        double p1 = 1.0, p2 = 0.0;
-        for (int j = 0; j < N; ++j) {
-          double p3 = p2;
-          p2 = p1;
-          p1 = ((2.0 * j + 1.0) * z * p2 - j * p3) / (j + 1.0);
-        }
-        dp = N * (z * p1 - p2) / (z * z - 1.0);
-        double z_old = z;
-        z = z_old - p1 / dp;
-        if (std::fabs(z - z_old) < 1e-15) break;
-      }
-      x[size_t(i)] = z;
-      w[size_t(i)] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-  }
-};
 
 /// Directional albedo tables of the GGX reflection lobe with Schlick Fresnel:
 /// E(c, r; F0) = F0 A(c, r) + (1 - F0) B(c, r), bilinear in (c^(1/4), roughness r) on a
