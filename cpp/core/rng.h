@@ -7,6 +7,9 @@
 #pragma once
 
 #include <cstdint>
+#if defined(__GFNI__) && defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 #include "core/math.h"
 
@@ -25,11 +28,19 @@ inline uint64_t mix64(uint64_t z) {
 inline float bits_to_unit_float(uint32_t bits) { return float(bits >> 8) * 0x1p-24f; }
 
 inline uint32_t reverse_bits32(uint32_t v) {
+#if defined(__GFNI__) && defined(__SSE2__)
+  // NOTE: GF2P8AFFINEQB with the matrix 0x8040201008040201 reverses the bits of every byte
+  // (Intel SDM, "Galois Field New Instructions"); a byte swap completes the reversal.
+  __m128i x = _mm_cvtsi32_si128(int(v));
+  x = _mm_gf2p8affine_epi64_epi8(x, _mm_set1_epi64x(0x8040201008040201ll), 0);
+  return __builtin_bswap32(uint32_t(_mm_cvtsi128_si32(x)));
+#else
   v = ((v >> 1) & 0x55555555u) | ((v & 0x55555555u) << 1);
   v = ((v >> 2) & 0x33333333u) | ((v & 0x33333333u) << 2);
   v = ((v >> 4) & 0x0f0f0f0fu) | ((v & 0x0f0f0f0fu) << 4);
   v = ((v >> 8) & 0x00ff00ffu) | ((v & 0x00ff00ffu) << 8);
   return (v >> 16) | (v << 16);
+#endif
 }
 
 /// Second dimension of the Sobol sequence (primitive polynomial x + 1): direction numbers
@@ -43,11 +54,18 @@ inline uint32_t sobol_dim1(uint32_t i) {
 }
 
 /// reverse_bits32(sobol_dim1(i)), computed directly with bit-reversed direction numbers.
+/// NOTE: the bit-reversed direction numbers of this dimension are the rows of Pascal's
+/// triangle mod 2: bit j of w_k is binom(k, j) mod 2, which by Lucas' theorem is 1 iff the
+/// bits of j are a subset of those of k. So bit j of the result is the xor of the index
+/// bits k that are supersets of j: a superset (zeta) transform over the 5 bit positions of
+/// j, done with five masked shift-xor steps instead of a loop over the index bits.
 inline uint32_t sobol_dim1_reversed(uint32_t i) {
-  uint32_t x = 0, v = 1u;
-  for (; i; i >>= 1, v ^= v << 1)
-    if (i & 1u) x ^= v;
-  return x;
+  i ^= (i >> 1) & 0x55555555u;
+  i ^= (i >> 2) & 0x33333333u;
+  i ^= (i >> 4) & 0x0f0f0f0fu;
+  i ^= (i >> 8) & 0x00ff00ffu;
+  i ^= (i >> 16) & 0x0000ffffu;
+  return i;
 }
 
 /// The hash of Burley 2020 applied to bit-reversed input (see owen_scramble).
@@ -124,10 +142,16 @@ class PixelSampler {
   }
 
   /// Dimensions (dim, dim + 1) for an even `dim`: one 2D point of the pair's net.
+  Vec2f get_2d(uint32_t dim) const { return get_2d_keyed(pair_key(dim)); }
+
+  /// The per-pixel key of the pair holding `dim`: the same for every sample of the pixel,
+  /// so callers that draw the same pair for many samples can compute it once.
+  uint64_t pair_key(uint32_t dim) const { return mix64(m_key ^ (uint64_t(dim >> 1) * 0x9e3779b97f4a7c15ull)); }
+
+  /// get_2d with the pair's key from pair_key() of any sampler of the same (seed, pixel).
   /// NOTE: owen_scramble(reverse(i)) = reverse(laine_karras(i)), and likewise with the
   /// bit-reversed Sobol direction numbers, so each coordinate costs one bit reversal.
-  Vec2f get_2d(uint32_t dim) const {
-    uint64_t h = mix64(m_key ^ (uint64_t(dim >> 1) * 0x9e3779b97f4a7c15ull));
+  Vec2f get_2d_keyed(uint64_t h) const {
     uint32_t index = permute_index(m_sample, m_spp, uint32_t(h));
     uint32_t seed = uint32_t(h >> 32);
     uint32_t x = reverse_bits32(laine_karras(index, seed));

@@ -54,6 +54,21 @@ struct PathState {
   float cone_width = 0.f, cone_spread = 0.f;  ///< ray cone for texture filtering (ray_cone.h)
 };
 
+/// Pair keys (PixelSampler::pair_key) of one path vertex's sample dimensions. They depend
+/// only on (seed, pixel, bounce), so the lanes of a packet share them.
+struct VertexKeys {
+  uint32_t bounce = ~0u;
+  uint64_t light = 0, bsdf = 0, pick_lobe = 0;
+  void update(uint32_t b, const PixelSampler& sampler) {
+    if (b == bounce) return;
+    uint32_t base = 2 + b * k_dims_per_vertex;
+    light = sampler.pair_key(base);
+    bsdf = sampler.pair_key(base + 2);
+    pick_lobe = sampler.pair_key(base + 4);
+    bounce = b;
+  }
+};
+
 class PathTracer {
  public:
   PathTracer(const RenderScene& scene, const RenderSettings& settings)
@@ -80,12 +95,13 @@ class PathTracer {
   /// The current ray hit a surface: add emission, prepare a shadow ray for next-event
   /// estimation (returns true and fills `shadow`), and sample the next direction (or end
   /// the path by clearing `st.active`).
-  bool on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, Ray* shadow) const {
+  bool on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow) const {
     const RenderScene& sc = m_scene;
     if (st.bounce == 0) st.hit_geometry = true;
     const InstanceRecord& inst = sc.instances[hit.inst];
     const Material* mat = sc.material_of(inst, hit.prim);
-    const uint32_t needs = mat->needs();
+    const Material::Traits traits = mat->traits();
+    const uint32_t needs = traits.needs;
     SurfaceInteraction si = make_interaction(inst, hit, (needs & k_needs_tangent) != 0);
     if (m_s.texture_filtering) {
       st.cone_width += st.cone_spread * hit.t;  // ray_cone.h, eq. (29)
@@ -95,7 +111,7 @@ class PathTracer {
     bool shadow_requested = false;
 
     // Emission seen by this segment.
-    if (mat->is_emissive()) {
+    if (traits.emissive) {
       Color le = mat->emission(si, wo);
       if (!is_black(le)) {
         float w = 1.f;
@@ -108,13 +124,13 @@ class PathTracer {
         st.L += st.beta * le * w;
       }
     }
-    uint32_t flags = mat->flags();
+    uint32_t flags = traits.flags;
     if (st.segments >= m_s.max_depth || flags == k_bsdf_none) {
       st.active = false;
       return false;
     }
-    uint32_t base = 2 + st.bounce * k_dims_per_vertex;
-    const Vec2f u_pick_lobe = sampler.get_2d(base + 4);  // light choice, BSDF lobe
+    keys.update(st.bounce, sampler);
+    const Vec2f u_pick_lobe = sampler.get_2d_keyed(keys.pick_lobe);  // light choice, BSDF lobe
 
     // Next-event estimation: sample a light, defer the shadow ray.
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
@@ -124,8 +140,9 @@ class PathTracer {
       const Light* light = sc.lights[li];
       LightSample ls;
       LightSampleContext ctx{si.p, si.p_error};
-      if (light->sample(ctx, sampler.get_2d(base), &ls)) {
-        Color f = mat->eval(si, wo, ls.wi);
+      if (light->sample(ctx, sampler.get_2d_keyed(keys.light), &ls)) {
+        float bsdf_pdf;
+        Color f = mat->eval_pdf(si, wo, ls.wi, &bsdf_pdf);
         if (!is_black(f)) {
           shadow->o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
           if (ls.infinite) {
@@ -137,7 +154,7 @@ class PathTracer {
             shadow->t_max = 1.f - k_shadow_epsilon;
           }
           float light_pdf = pick_pmf * ls.pdf;
-          float w = ls.delta ? 1.f : power_heuristic(light_pdf, mat->pdf(si, wo, ls.wi));
+          float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);
           st.shadow_contrib = st.beta * f * ls.li * (w / light_pdf);
           shadow_requested = true;
         }
@@ -146,7 +163,7 @@ class PathTracer {
 
     // BSDF sampling.
     BsdfSample bs;
-    if (!mat->sample(si, wo, u_pick_lobe.y, sampler.get_2d(base + 2), &bs)) {
+    if (!mat->sample(si, wo, u_pick_lobe.y, sampler.get_2d_keyed(keys.bsdf), &bs)) {
       st.active = false;
       return shadow_requested;
     }
@@ -165,7 +182,7 @@ class PathTracer {
     // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
     if (st.segments > m_s.rr_depth) {
       float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
-      if (sampler.get_independent(base + 6) < q) {
+      if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
         st.active = false;
         return shadow_requested;
       }
@@ -184,18 +201,21 @@ class PathTracer {
     constexpr int W = k_packet_size;
     PathState st[W];
     PixelSampler samplers[W];
+    uint64_t pixel_key = 0;
     for (uint32_t i = 0; i < uint32_t(W); ++i) {
       samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_s.spp);
+      if (i == 0) pixel_key = samplers[0].pair_key(0);
       if (i >= n) {
         st[i].active = false;
         continue;
       }
       {
-        Vec2f j = samplers[i].get_2d(0);
+        Vec2f j = samplers[i].get_2d_keyed(pixel_key);
         st[i].ray = sc.camera.generate_ray(float(x) + j.x, float(y) + j.y);
       }
       st[i].cone_spread = m_sample_spread;
     }
+    VertexKeys keys;
     for (;;) {
       RayPacket rays;
       uint32_t n_active = 0;
@@ -221,7 +241,7 @@ class PathTracer {
           continue;
         }
         Ray shadow;
-        if (on_hit(st[i], hp.hit[i], samplers[i], &shadow)) {
+        if (on_hit(st[i], hp.hit[i], samplers[i], keys, &shadow)) {
           shadows.set(i, shadow);
           ++n_shadow;
         }

@@ -18,6 +18,9 @@ AreaLight::AreaLight(uint32_t inst, uint32_t prim_count, std::vector<EmissiveTri
     w[i] = area * lum;
     total += w[i];
     double sides = t.material->two_sided_emission() ? 2.0 : 1.0;
+    m_tris[i].uniform = t.material->uniform_emission();
+    m_tris[i].two_sided = t.material->two_sided_emission();
+    m_tris[i].uniform_le = t.material->average_emission();
     m_power += float(k_pi * sides * area * lum);
   }
   if (!(total > 0.0)) throw Error("area light of instance " + std::to_string(inst) + " has zero area");
@@ -50,14 +53,19 @@ bool AreaLight::sample(const LightSampleContext& ctx, const Vec2f& u_in, LightSa
   float dist = std::sqrt(dist2);
   Vec3f wi = d / dist;
   float cos_l = -dot(t.n, wi);
-  SurfaceInteraction si;
-  si.p = p;
-  si.ng = t.n;
-  si.ns = t.n;
-  si.uv = t.uv0 * b0 + t.uv1 * b.x + t.uv2 * b.y;
-  si.inst = m_inst;
-  si.prim = t.prim;
-  Color le = t.material->emission(si, -wi);
+  Color le(0.f);
+  if (t.uniform) {
+    if (t.two_sided || cos_l > 0.f) le = t.uniform_le;
+  } else {
+    SurfaceInteraction si;
+    si.p = p;
+    si.ng = t.n;
+    si.ns = t.n;
+    si.uv = t.uv0 * b0 + t.uv1 * b.x + t.uv2 * b.y;
+    si.inst = m_inst;
+    si.prim = t.prim;
+    le = t.material->emission(si, -wi);
+  }
   if (is_black(le) || cos_l == 0.f) return false;
   out->wi = wi;
   out->li = le;

@@ -75,6 +75,10 @@ struct EmissiveTriangle {
   float p_error = 0.f;
   uint32_t prim;
   const Material* material;
+  /// Set by AreaLight from Material::uniform_emission(): the radiance of every point
+  /// towards the emitting face(s), so sampling needs no emission lookup.
+  bool uniform = false, two_sided = false;
+  Color uniform_le{0.f};
 };
 
 /// All emissive triangles of one instance; triangles are chosen by area x luminance.

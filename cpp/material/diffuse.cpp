@@ -17,6 +17,9 @@ class DiffuseMaterial final : public Material {
   float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     return lambert::pdf(si, wo, wi);
   }
+  Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const override {
+    return lambert::eval_pdf(si, wo, wi, eval_texture(*m_albedo, si), pdf_out);
+  }
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
     return lambert::sample(si, wo, u, eval_texture(*m_albedo, si), out);
   }

@@ -36,6 +36,20 @@ inline float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi)
   return cos_i > 0.f ? cos_i * k_inv_pi : 0.f;
 }
 
+/// eval and pdf in one pass (they share the orientation tests and the cosine).
+inline Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, const Color& albedo,
+                      float* pdf_out) {
+  *pdf_out = 0.f;
+  Vec3f n;
+  float side;
+  if (!oriented_normal(si, wo, &n, &side)) return Color(0.f);
+  if (dot(si.ng, wi) * side <= 0.f) return Color(0.f);
+  float cos_i = dot(n, wi);
+  if (!(cos_i > 0.f)) return Color(0.f);
+  *pdf_out = cos_i * k_inv_pi;
+  return albedo * (cos_i * k_inv_pi);
+}
+
 inline bool sample(const SurfaceInteraction& si, const Vec3f& wo, const Vec2f& u, const Color& albedo,
                    BsdfSample* out) {
   Vec3f n;

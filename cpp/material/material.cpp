@@ -57,6 +57,7 @@ std::shared_ptr<Material> create_material(const std::string& type, const ParamSe
                   "; known types: " + list);
     }
     params.check_unused("material '" + type + "'");
+    m->cache_traits();
   } catch (const FileError& e) {
     throw e.with_context(context);
   } catch (const Error& e) {

@@ -92,9 +92,28 @@ struct BsdfSample {
 
 class Material {
  public:
+  /// flags(), needs() and is_emissive(), which are fixed once a material is built.
+  struct Traits {
+    uint32_t flags = 0, needs = 0;
+    bool emissive = false;
+  };
+
   virtual ~Material() = default;
+  /// The traits without virtual calls once cache_traits() ran (create_material does).
+  Traits traits() const { return m_traits_cached ? m_traits : Traits{flags(), needs(), is_emissive()}; }
+  void cache_traits() {
+    m_traits = Traits{flags(), needs(), is_emissive()};
+    m_traits_cached = true;
+  }
+
   virtual Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const = 0;
   virtual float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const = 0;
+  /// eval() and pdf() together (next-event estimation needs both); materials override it
+  /// when the two share work. Must equal the separate calls.
+  virtual Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const {
+    *pdf_out = pdf(si, wo, wi);
+    return eval(si, wo, wi);
+  }
   /// `u_lobe` selects a lobe, `u` warps the direction. Returns false when no direction
   /// is produced (the path ends).
   virtual bool sample(const SurfaceInteraction& si, const Vec3f& wo, float u_lobe, const Vec2f& u,
@@ -115,6 +134,10 @@ class Material {
   virtual Color average_emission() const { return Color(0.f); }
   /// True when emission leaves both faces.
   virtual bool two_sided_emission() const { return false; }
+  /// True when emission(si, wo) is exactly average_emission() towards the emitting face(s)
+  /// (the front, or both with two_sided_emission()) and zero otherwise, wherever si is:
+  /// light sampling then skips building an interaction for the emission lookup.
+  virtual bool uniform_emission() const { return false; }
   /// Coverage for alpha cut-outs in [0, 1]: 1 = opaque surface, 0 = a hole the ray passes.
   virtual float alpha(const SurfaceInteraction& si) const { return 1.f; }
   /// True when alpha() can be below alpha_cutoff() somewhere. Only then are the meshes
@@ -128,6 +151,10 @@ class Material {
   virtual float alpha_cutoff() const { return 0.5f; }
   /// The cut-out test: false when a hit at `si` must be ignored.
   bool alpha_opaque(const SurfaceInteraction& si) const { return !has_alpha() || alpha(si) >= alpha_cutoff(); }
+
+ private:
+  Traits m_traits;
+  bool m_traits_cached = false;
 };
 
 using TextureLookup = std::function<std::shared_ptr<Texture>(uint32_t id)>;

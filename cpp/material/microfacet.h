@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/math.h"
+#include "core/sampling.h"
 #include "material/material.h"
 
 namespace sg {
@@ -61,10 +62,10 @@ struct GGX {
     Vec3f t1 = lensq > 0.f ? Vec3f(-vh.y, vh.x, 0.f) / std::sqrt(lensq) : Vec3f(1.f, 0.f, 0.f);
     Vec3f t2 = cross(vh, t1);
     // Section 4.2: parameterization of the projected area.
-    float r = std::sqrt(u.x);
-    float phi = 2.f * k_pi * u.y;
-    float p1 = r * std::cos(phi);
-    float p2 = r * std::sin(phi);
+    float r = std::sqrt(u.x), sin_phi, cos_phi;
+    sincos_2pi(u.y, &sin_phi, &cos_phi);
+    float p1 = r * cos_phi;
+    float p2 = r * sin_phi;
     float s = 0.5f * (1.f + vh.z);
     p2 = (1.f - s) * std::sqrt(std::max(0.f, 1.f - p1 * p1)) + s * p2;
     // Section 4.3: reprojection onto the hemisphere.

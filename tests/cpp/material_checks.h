@@ -100,6 +100,26 @@ inline void check_sampling(const sg::Material& mat, const sg::SurfaceInteraction
     if (!weight_ok && n_bad_weight++ == 0)
       first_problem += " weight " + std::to_string(bs.weight.x) + " vs eval/pdf " + std::to_string(f.x / pdf) + ";";
   }
+  // eval_pdf() (next-event estimation) equals the separate eval() and pdf() calls, on
+  // sampled directions and on random ones from the whole sphere.
+  int n_bad_eval_pdf = 0;
+  auto check_eval_pdf = [&](const sg::Vec3f& wi) {
+    float p_joint;
+    sg::Color f_joint = mat.eval_pdf(si, wo, wi, &p_joint);
+    sg::Color f = mat.eval(si, wo, wi);
+    float p = mat.pdf(si, wo, wi);
+    bool ok = rel_diff(p_joint, p) <= 1e-6;
+    for (int k = 0; k < 3; ++k) ok = ok && rel_diff(f_joint[k], f[k]) <= 1e-6;
+    if (!ok && n_bad_eval_pdf++ == 0)
+      first_problem += " eval_pdf (" + std::to_string(f_joint.x) + ", " + std::to_string(p_joint) + ") vs eval/pdf (" +
+                       std::to_string(f.x) + ", " + std::to_string(p) + ");";
+  };
+  for (int i = 0; i < 2000; ++i) {
+    sg::BsdfSample bs;
+    if (mat.sample(si, wo, rng.next_float(), rng.next_2d(), &bs)) check_eval_pdf(bs.wi);
+    check_eval_pdf(to_f(random_unit(rng)));
+  }
+  EXPECT_EQ(n_bad_eval_pdf, 0) << what << ":" << first_problem;
   EXPECT_EQ(n_bad_dir, 0) << what << ": sampled directions not unit length";
   EXPECT_EQ(n_bad_pdf, 0) << what << ":" << first_problem;
   EXPECT_EQ(n_bad_weight, 0) << what << ":" << first_problem;

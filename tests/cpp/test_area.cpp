@@ -301,3 +301,22 @@ TEST(area, zero_area_light_throws) {
   t.p2 = t.p1;  // degenerate
   EXPECT_THROW(AreaLight(0, 1, {t}), Error);
 }
+
+// AreaLight skips the emission lookup for materials that declare uniform_emission(): the
+// declaration must hold wherever the light is hit, from either side.
+TEST(area, uniform_emission_contract_of_emissive) {
+  for (bool two_sided : {false, true}) {
+    auto m = emissive(Color(0.3f, 2.f, 5.f), two_sided);
+    ASSERT_TRUE(m->uniform_emission());
+    Pcg32 rng(11);
+    for (int i = 0; i < 1000; ++i) {
+      SurfaceInteraction si;
+      si.p = Vec3f(rng.next_float(), rng.next_float(), rng.next_float()) * 10.f;
+      si.ng = si.ns = normalize(Vec3f(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f));
+      si.uv = rng.next_2d();
+      Vec3f wo = normalize(Vec3f(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() - 0.5f));
+      Color expect = (two_sided || dot(si.ng, wo) > 0.f) ? m->average_emission() : Color(0.f);
+      ASSERT_EQ(m->emission(si, wo), expect) << "two_sided=" << two_sided;
+    }
+  }
+}

@@ -30,6 +30,21 @@ TEST(rng, sobol_dim1_first_points) {
   for (uint32_t i = 0; i < 8; ++i) EXPECT_DOUBLE_EQ(sobol_dim1(i) * 0x1p-32, expect[i]) << i;
 }
 
+// The fast bit tricks (GFNI byte reversal, superset transform) against their definitions.
+TEST(rng, bit_reversal_and_reversed_sobol_match_their_definitions) {
+  auto naive_reverse = [](uint32_t v) {
+    uint32_t r = 0;
+    for (int b = 0; b < 32; ++b) r |= ((v >> b) & 1u) << (31 - b);
+    return r;
+  };
+  Pcg32 rng(5);
+  for (uint32_t k = 0; k < 100000; ++k) {
+    uint32_t i = k < 4096 ? k : rng.next_u32();
+    ASSERT_EQ(reverse_bits32(i), naive_reverse(i)) << i;
+    ASSERT_EQ(sobol_dim1_reversed(i), naive_reverse(sobol_dim1(i))) << i;
+  }
+}
+
 // Every pair of dimensions of a pixel's spp samples is a (0, 2)-net in base 2 for
 // power-of-two spp: each elementary interval of area 1/spp holds exactly one point.
 TEST(rng, each_dimension_pair_is_stratified_over_the_pixel) {
