@@ -18,11 +18,11 @@ void PinholeCamera::validate() const {
 
 Ray PinholeCamera::generate_ray(float u, float v, float* z_per_t) const {
   Vec3f d_cam((u - cx) / fx, (v - cy) / fy, 1.f);
-  float inv_len = 1.f / length(d_cam);
-  d_cam *= inv_len;
-  if (z_per_t) *z_per_t = d_cam.z;
+  // z per unit distance along the ray: the z of the unit camera-space direction.
+  if (z_per_t) *z_per_t = 1.f / length(d_cam);
   Ray r;
-  r.o = world_from_camera.apply_point(Vec3f(0.f));
+  const auto& m = world_from_camera.m;
+  r.o = Vec3f(m[3], m[7], m[11]);  // the camera-space origin in world space
   r.d = normalize(world_from_camera.apply_vector(d_cam));
   r.t_max = k_inf;
   return r;

@@ -91,18 +91,20 @@ inline uint32_t owen_scramble(uint32_t x, uint32_t seed) {
   return reverse_bits32(x);
 }
 
-/// A pseudo-random permutation of [0, n) evaluated at i, keyed by `key`.
-/// NOTE: cycle-walking over a bijective hash on the next power of two (the construction of
-/// Kensler 2013, "Correlated Multi-Jittered Sampling", sec. 3; our own bijection: xor with
-/// the key, odd multiplications and in-mask xorshifts are each invertible modulo 2^b).
-inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
-  if (n <= 1) return 0;
-  uint32_t mask = n - 1;
+/// The smallest 2^b - 1 >= n - 1 (the bit mask permute_index walks in).
+inline uint32_t permutation_mask(uint32_t n) {
+  uint32_t mask = n > 1 ? n - 1 : 0;
   mask |= mask >> 1;
   mask |= mask >> 2;
   mask |= mask >> 4;
   mask |= mask >> 8;
   mask |= mask >> 16;
+  return mask;
+}
+
+/// permute_index with the mask of n precomputed by permutation_mask(n).
+inline uint32_t permute_index_masked(uint32_t i, uint32_t n, uint32_t mask, uint32_t key) {
+  if (n <= 1) return 0;
   uint32_t k1 = key & mask, k2 = (key >> 16) & mask;
   do {
     i ^= k1;
@@ -115,6 +117,14 @@ inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
   return i;
 }
 
+/// A pseudo-random permutation of [0, n) evaluated at i, keyed by `key`.
+/// NOTE: cycle-walking over a bijective hash on the next power of two (the construction of
+/// Kensler 2013, "Correlated Multi-Jittered Sampling", sec. 3; our own bijection: xor with
+/// the key, odd multiplications and in-mask xorshifts are each invertible modulo 2^b).
+inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
+  return permute_index_masked(i, n, permutation_mask(n), key);
+}
+
 /// Sampler for one (seed, pixel, sample) triple of a pixel rendered with `spp` samples.
 ///
 /// Dimensions come in pairs (2k, 2k + 1); each pair is a 2D Owen-scrambled Sobol point set
@@ -125,9 +135,10 @@ inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
 /// images are bit-identical for any thread count or tile order.
 class PixelSampler {
  public:
-  PixelSampler() : m_key(0), m_sample(0), m_spp(1) {}
+  PixelSampler() : m_key(0), m_sample(0), m_spp(1), m_mask(0) {}
   PixelSampler(uint64_t seed, uint64_t pixel_index, uint32_t sample_index, uint32_t spp = 1)
-      : m_key(mix64(mix64(seed) ^ pixel_index)), m_sample(sample_index), m_spp(spp ? spp : 1) {}
+      : m_key(mix64(mix64(seed) ^ pixel_index)), m_sample(sample_index), m_spp(spp ? spp : 1),
+        m_mask(permutation_mask(m_spp)) {}
 
   /// Value of dimension `dim` in [0, 1), independent of the order of calls.
   float get(uint32_t dim) const {
@@ -152,7 +163,7 @@ class PixelSampler {
   /// NOTE: owen_scramble(reverse(i)) = reverse(laine_karras(i)), and likewise with the
   /// bit-reversed Sobol direction numbers, so each coordinate costs one bit reversal.
   Vec2f get_2d_keyed(uint64_t h) const {
-    uint32_t index = permute_index(m_sample, m_spp, uint32_t(h));
+    uint32_t index = permute_index_masked(m_sample, m_spp, m_mask, uint32_t(h));
     uint32_t seed = uint32_t(h >> 32);
     uint32_t x = reverse_bits32(laine_karras(index, seed));
     uint32_t y = reverse_bits32(laine_karras(sobol_dim1_reversed(index), seed ^ 0x68bc21ebu));
@@ -161,7 +172,7 @@ class PixelSampler {
 
  private:
   uint64_t m_key;
-  uint32_t m_sample, m_spp;
+  uint32_t m_sample, m_spp, m_mask;
 };
 
 /// Small sequential generator (PCG32, O'Neill 2014) for tests and scene-building code.
