@@ -51,6 +51,8 @@ const ImageIoApi& api() {
 
 }  // namespace
 
+void load_image_plugin() { api(); }
+
 ImageData load_image(const std::string& path, ColorSpace space) {
   ImageData img;
   std::string err;

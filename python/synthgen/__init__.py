@@ -13,6 +13,7 @@ from ._core import (  # noqa: F401
     SynthgenError,
     TextureRef,
     __version__,
+    load_image_plugin,
 )
 from .scene_file import SceneFileError, build_scene, load_scene  # noqa: F401
 
@@ -26,5 +27,6 @@ __all__ = [
     "TextureRef",
     "__version__",
     "build_scene",
+    "load_image_plugin",
     "load_scene",
 ]
