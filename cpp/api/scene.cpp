@@ -185,6 +185,19 @@ void Scene::remove_instance(uint32_t id) {
   m_structure_dirty = true;
 }
 
+void Scene::set_instance_visible(uint32_t id, bool visible) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  if (e.visible == visible) return;
+  e.visible = visible;
+  e.dirty = true;
+  m_structure_dirty = true;
+}
+
+bool Scene::instance_visible(uint32_t id) const {
+  if (id >= m_instances.size() || !m_instances[id]) throw Error("instance " + std::to_string(id) + " does not exist");
+  return m_instances[id]->visible;
+}
+
 size_t Scene::instance_count() const {
   size_t n = 0;
   for (const auto& i : m_instances) n += i.has_value();
@@ -255,7 +268,10 @@ void Scene::commit() {
   for (size_t i = 0; i < m_instances.size(); ++i) {
     auto& e = m_instances[i];
     if (!e || !e->dirty) continue;
-    m_accel->set_instance(uint32_t(i), e->mesh_id, e->world_from_object);
+    if (e->visible)
+      m_accel->set_instance(uint32_t(i), e->mesh_id, e->world_from_object);
+    else
+      m_accel->remove_instance(uint32_t(i));  // hidden: out of the top level, mesh BVH kept
     e->dirty = false;
     top_dirty = true;
   }
@@ -318,7 +334,7 @@ void Scene::build_render_scene() {
 
   for (size_t i = 0; i < m_instances.size(); ++i) {
     const auto& e = m_instances[i];
-    if (!e) continue;
+    if (!e || !e->visible) continue;
     const MeshEntry& me = *m_meshes[e->mesh_id];
     InstanceRecord& r = rs.instances[i];
     r.active = true;

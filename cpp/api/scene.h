@@ -82,6 +82,11 @@ class Scene {
   void set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instance_id);
   void set_instance_material(uint32_t id, int64_t material_id);
   void remove_instance(uint32_t id);
+  /// Hides an instance from every ray (camera, shadow, labels) and from light sampling
+  /// without removing it: showing it again needs no BVH build (only the top level). Used for
+  /// amodal masks (one object rendered alone) and by randomizers that toggle objects.
+  void set_instance_visible(uint32_t id, bool visible);
+  bool instance_visible(uint32_t id) const;
   size_t instance_count() const;
 
   // Lights ---------------------------------------------------------------------------
@@ -135,6 +140,7 @@ class Scene {
     Transform world_from_object;
     uint32_t class_id = 0, instance_id = 0;
     int64_t material_id = -1;
+    bool visible = true;
     bool dirty = true;
   };
   const std::vector<std::optional<MeshEntry>>& meshes() const { return m_meshes; }

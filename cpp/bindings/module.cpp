@@ -328,6 +328,10 @@ a BVH build). render() commits pending edits first.)doc")
       .def("set_instance_labels", &Scene::set_instance_labels, py::arg("instance"), py::arg("class_id"), py::arg("instance_id"))
       .def("set_instance_material", &Scene::set_instance_material, py::arg("instance"), py::arg("material_id"))
       .def("remove_instance", &Scene::remove_instance, py::arg("instance"))
+      .def("set_instance_visible", &Scene::set_instance_visible, py::arg("instance"), py::arg("visible"),
+           "Hides (or shows again) an instance for every ray and for light sampling, keeping its BVH:\n"
+           "toggling costs a top-level rebuild only.")
+      .def("instance_visible", &Scene::instance_visible, py::arg("instance"))
       .def("instance_count", &Scene::instance_count)
       .def("add_light",
            [](Scene& s, const std::string& type, const py::dict& params) {
@@ -357,7 +361,7 @@ a BVH build). render() commits pending edits first.)doc")
       })
       .def("render",
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
-              uint32_t tile_size, bool texture_filtering) {
+              uint32_t tile_size, bool texture_filtering, bool labels_only) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -366,6 +370,7 @@ a BVH build). render() commits pending edits first.)doc")
              rs.threads = threads;
              rs.tile_size = tile_size;
              rs.texture_filtering = texture_filtering;
+             rs.labels_only = labels_only;
              auto film = std::make_shared<Film>();
              {
                py::gil_scoped_release release;
@@ -375,7 +380,10 @@ a BVH build). render() commits pending edits first.)doc")
            },
            py::arg("spp") = 16, py::arg("max_depth") = 8, py::arg("rr_depth") = 5, py::arg("seed") = 0,
            py::arg("threads") = 0, py::arg("tile_size") = 16, py::arg("texture_filtering") = true,
-           "Path-traces the scene; releases the GIL. Returns a RenderResult.")
+           py::arg("labels_only") = false,
+           "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
+           "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
+           "centre ray's coverage).")
       .def("save", &Scene::save, py::arg("path"), "Writes the scene (XML + '.bin' sidecar) for replay.")
       .def_static("load", &Scene::load, py::arg("path"), "Replays a scene written by save().");
 }

@@ -266,13 +266,13 @@ class PathTracer {
   }
 
   /// Labels from the camera ray through the pixel centre.
-  void labels(uint32_t x, uint32_t y, Film* film, PathCounters& counters) const {
+  bool labels(uint32_t x, uint32_t y, Film* film, PathCounters& counters) const {
     const RenderScene& sc = m_scene;
     float z_per_t;
     Ray ray = sc.camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f, &z_per_t);
     RayHit hit;
     ++counters.rays;
-    if (!sc.accel->intersect(ray, &hit)) return;  // film is initialised to background
+    if (!sc.accel->intersect(ray, &hit)) return false;  // film is initialised to background
     const InstanceRecord& inst = sc.instances[hit.inst];
     const Material* mat = sc.material_of(inst, hit.prim);
     SurfaceInteraction si = make_interaction(inst, hit, (mat->needs() & k_needs_tangent) != 0);
@@ -292,6 +292,7 @@ class PathTracer {
     film->albedo[3 * i + 2] = a.z;
     film->instance_id[i] = inst.instance_id;
     film->class_id[i] = inst.class_id;
+    return true;
   }
 
  private:
@@ -324,7 +325,11 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
           for (uint32_t y = r.rows().begin(); y < r.rows().end(); ++y)
             for (uint32_t x = r.cols().begin(); x < r.cols().end(); ++x) {
               uint64_t pixel = uint64_t(y) * w + x;
-              pt.labels(x, y, film, c);
+              bool centre_hit = pt.labels(x, y, film, c);
+              if (settings.labels_only) {
+                film->alpha[pixel] = centre_hit ? 1.f : 0.f;
+                continue;
+              }
               Color sum(0.f);
               uint32_t valid = 0, hits = 0;
               for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
@@ -343,7 +348,7 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   RenderStats& st = film->stats;
   st.wall_time_s = secs;
-  st.samples = uint64_t(w) * h * settings.spp;
+  st.samples = settings.labels_only ? 0 : uint64_t(w) * h * settings.spp;
   st.rays = rays.load();
   st.nan_samples = nans.load();
   st.samples_per_s = secs > 0 ? double(st.samples) / secs : 0.0;

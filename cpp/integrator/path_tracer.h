@@ -19,6 +19,9 @@ struct RenderSettings {
   /// Filter texture lookups over the ray-cone footprint (integrator/ray_cone.h); false =
   /// point-sampled (bilinear, finest mip level) textures.
   bool texture_filtering = true;
+  /// Only the label outputs (depth, normal, albedo, ids, from the pixel-centre ray); rgb is
+  /// left 0 and alpha is 1 where the pixel-centre ray hits. For masks (e.g. amodal ones).
+  bool labels_only = false;
 
   void validate() const;
 };

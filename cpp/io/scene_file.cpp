@@ -170,6 +170,7 @@ void Scene::save(const std::string& path) const {
     n.append_attribute("instance_id") = e.instance_id;
     n.append_attribute("material") = static_cast<long long>(e.material_id);
     n.append_attribute("world_from_object") = fmt_floats(e.world_from_object.m.data(), 16).c_str();
+    if (!e.visible) n.append_attribute("visible") = false;
   }
   for (size_t i = 0; i < m_lights.size(); ++i) {
     if (!m_lights[i]) continue;
@@ -253,6 +254,7 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
       s.add_instance(n.attribute("mesh").as_uint(), Transform::from_row_major(t.data()),
                      n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
                      n.attribute("material").as_llong());
+      if (!n.attribute("visible").as_bool(true)) s.set_instance_visible(uint32_t(id), false);
     }
     for (pugi::xml_node n : root.children("light")) {
       pad(s.m_lights, n.attribute("id").as_ullong());

@@ -1,0 +1,73 @@
+"""Scene.set_instance_visible and labels-only renders (used for amodal masks)."""
+from __future__ import annotations
+
+import numpy as np
+
+import synthgen as sg
+from synthgen import primitives as P
+
+
+def _scene():
+    s = sg.Scene()
+    b = P.box((1.0, 1.0, 1.0))
+    m = s.add_mesh(b["positions"], b["indices"])
+    front = s.add_instance(m, P.translate([0.3, 0.0, 0.0]), class_id=1)   # partly hides `back`
+    back = s.add_instance(m, P.translate([-0.3, 0.2, 1.5]), class_id=2)
+    lamp = s.add_mesh(*(lambda q: (q["positions"], q["indices"]))(P.plane(0.5, 0.5)))
+    emit = s.add_material("emissive", {"radiance": 50.0, "two_sided": True})
+    light = s.add_instance(lamp, P.translate([0.0, 2.0, 0.0]), class_id=3, material_id=emit)
+    s.add_light("environment", {"radiance": 0.2})
+    wfc = sg.PinholeCamera.look_at([0.0, 0.5, -5.0], [0.0, 0.3, 0.5], [0.0, 1.0, 0.0])
+    s.set_camera(sg.PinholeCamera.from_fov(40.0, 96, 72, wfc))
+    return s, front, back, light
+
+
+def test_hidden_instance_gives_the_amodal_mask_without_bvh_builds():
+    s, front, back, light = _scene()
+    s.commit()
+    both = s.render(spp=1, labels_only=True)
+    assert both.stats["samples"] == 0 and float(np.abs(both.rgb).max()) == 0.0
+    visible_back = both.instance_id == back + 1
+    builds = s.commit_stats["mesh_bvh_builds"]
+    s.set_instance_visible(front, False)
+    s.commit()
+    assert s.commit_stats["mesh_bvh_builds"] == builds, "hiding rebuilt a mesh BVH"
+    alone = s.render(spp=1, labels_only=True)
+    amodal_back = alone.instance_id == back + 1
+    assert not np.any(alone.instance_id == front + 1)
+    # The amodal mask contains the visible one and is larger (the front box hides part of it).
+    assert np.all(amodal_back[visible_back]) and amodal_back.sum() > visible_back.sum() + 50
+    # Reference: a scene without the front box at all.
+    ref, _, back2, _ = _scene()
+    ref.remove_instance(0)
+    ref.commit()
+    np.testing.assert_array_equal(ref.render(spp=1, labels_only=True).instance_id == back2 + 1, amodal_back)
+    # Shown again: identical to the first render.
+    s.set_instance_visible(front, True)
+    s.commit()
+    np.testing.assert_array_equal(s.render(spp=1, labels_only=True).instance_id, both.instance_id)
+
+
+def test_hidden_emitter_is_not_a_light_and_visibility_survives_save(tmp_path):
+    s, front, back, light = _scene()
+    s.commit()
+    first = s.render(spp=16, max_depth=3, seed=1)
+    lit_boxes = first.rgb[(first.instance_id > 0) & (first.instance_id != light + 1)].mean()
+    s.set_instance_visible(light, False)
+    s.commit()
+    assert not s.instance_visible(light)
+    dark = s.render(spp=16, max_depth=3, seed=1)
+    boxes = (dark.instance_id > 0) & (dark.instance_id != light + 1)
+    assert dark.rgb[boxes].mean() < 0.8 * lit_boxes, \
+        "a hidden emitter still lights the scene"
+    # Hidden is exactly removed: the same image as a scene without that instance.
+    ref, _, _, ref_light = _scene()
+    ref.remove_instance(ref_light)
+    ref.commit()
+    np.testing.assert_array_equal(ref.render(spp=16, max_depth=3, seed=1).rgb, dark.rgb)
+    path = str(tmp_path / "scene.xml")
+    s.save(path)
+    t = sg.Scene.load(path)
+    t.commit()
+    assert not t.instance_visible(light)
+    np.testing.assert_array_equal(t.render(spp=16, max_depth=3, seed=1).rgb, dark.rgb)
