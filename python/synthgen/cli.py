@@ -95,6 +95,29 @@ def build_parser() -> argparse.ArgumentParser:
     _debug_option(p, top=False)
     p.set_defaults(func=_cmd_demo)
 
+    p = sub.add_parser("run", help="render a scenario into a labelled dataset",
+                       description="Render the frames of a scenario file into a dataset: images, depth, instance "
+                                   "and semantic masks, COCO / YOLO / KITTI labels, per-frame metadata.")
+    p.add_argument("scenario", metavar="SCENARIO.yaml", help="scenario file (see scenarios/default.yaml)")
+    p.add_argument("-o", "--output", metavar="DIR", required=True, help="output directory")
+    p.add_argument("-n", "--count", type=_positive_int, metavar="N", help="frames (default: the scenario's count)")
+    p.add_argument("--workers", type=_positive_int, default=1, metavar="N",
+                   help="worker processes on this machine (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:8786): run there")
+    p.add_argument("--resume", action="store_true", help="render only the frames missing from DIR")
+    p.add_argument("--only", type=int, nargs="+", metavar="K", help="(re-)render just these frames")
+    p.add_argument("--recycle", type=_positive_int, default=200, metavar="N",
+                   help="replace a worker process after N frames (default 200)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _debug_option(p, top=False)
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("validate", help="check a scenario file without rendering",
+                       description="Validate a scenario file: every error names file, line, column and key.")
+    p.add_argument("scenario", metavar="SCENARIO.yaml")
+    _debug_option(p, top=False)
+    p.set_defaults(func=_cmd_validate)
+
     p = sub.add_parser("schema", help="describe the scene file format",
                        description="Print every key of the scene file format with its type, default, range "
                                    "and meaning.")
@@ -171,6 +194,27 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
     print(format_schema())
     return EXIT_OK
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from . import runner
+
+    summary = runner.run(args.scenario, args.output, count=args.count, workers=args.workers,
+                         scheduler=args.scheduler, resume=args.resume, only=args.only, recycle=args.recycle,
+                         progress=not args.no_progress)
+    print(summary.text())
+    if summary["interrupted"]:
+        return EXIT_INTERRUPTED
+    return 0 if not summary["failures"] else 1
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from . import scenario
+
+    sc = scenario.load_scenario(args.scenario)
+    print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "
+          f"classes: {', '.join(sc.class_names)})")
+    return 0
 
 
 def _one_line(e: BaseException) -> str:

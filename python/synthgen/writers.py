@@ -52,6 +52,8 @@ __all__ = [
 #: Files written by :func:`write_outputs`, in writing order.
 OUTPUT_FILES = ("rgb.exr", "rgb.png", "depth.exr", "normal.exr", "albedo.exr", "instance.png", "class.png",
                 "meta.json")
+#: DateTime written into every EXR header (see :func:`write_exr`).
+EXR_DATETIME = "2000:01:01 00:00:00"
 #: Largest id a 16-bit PNG can hold.
 ID_MAX = 65535
 
@@ -147,7 +149,9 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: Optiona
     """Writes a float32 OpenEXR image (H x W, or H x W x C) bit-exactly (ZIP compression).
 
     Default channel names: one channel "Y", three "R", "G", "B", four "R", "G", "B", "A".
-    Infinities and NaNs are stored as they are. Returns the path.
+    Infinities and NaNs are stored as they are. The header's DateTime is a fixed
+    :data:`EXR_DATETIME` (OpenImageIO would write the current time), so equal images are
+    byte-identical files (reproducible datasets, comparable hashes). Returns the path.
     """
     path = os.fspath(path)
     a = _as_hwc(array, path).astype(np.float32, copy=False)
@@ -157,7 +161,7 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: Optiona
         channel_names = defaults.get(c) or tuple(f"C{i}" for i in range(c))
     if len(channel_names) != c:
         raise SynthgenError(f"{path}: {c} channels but {len(channel_names)} channel names")
-    return _oiio_write(path, a, oiio.FLOAT, channel_names, {"compression": "zip"})
+    return _oiio_write(path, a, oiio.FLOAT, channel_names, {"compression": "zip", "DateTime": EXR_DATETIME})
 
 
 def write_srgb_png(path: str | os.PathLike, rgb: np.ndarray) -> str:

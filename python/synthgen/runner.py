@@ -1,0 +1,684 @@
+"""Scenario runner: frames of a scenario -> a labelled dataset on disk.
+
+Layout of the output directory (frame k is ``{k:06d}``)::
+
+    images/000000.png        sRGB 8-bit            images/000000.exr   linear float (rgb_exr)
+    depth/000000.exr         camera z in metres, float32, +inf on background
+    depth16/000000.png       uint16 millimetres, 0 = no surface or beyond 65.535 m (depth16)
+    instance/000000.png      uint16 instance ids (1..N per frame, 0 = background/ground)
+    semantic/000000.png      uint16 class ids (1 + index in the scenario's class list)
+    labels/000000.txt        YOLO; dataset.yaml names the classes
+    kitti/000000.txt         KITTI 2D labels (+ 3D fields in the camera frame)
+    meta/000000.json         seed, every sampled parameter, objects (boxes, occlusion,
+                             truncation, pose), the frame's COCO records; written last
+    annotations/coco.json    assembled from meta/*.json at the end of a run (and on resume)
+
+Every file is written to a temporary name and renamed; ``meta`` is written last and marks
+a frame complete, so ``--resume`` renders exactly the frames without it and a killed run
+leaves no partial file under a final name.
+
+Each frame is a pure function of (scenario, frame index): its random numbers come from
+:func:`synthgen.scenario.frame_rng`, its renders from a seed derived from the same pair, and
+the worker's scene state (kept across frames: meshes and BVHs, materials, lights) never
+changes the result. Frames are therefore bit-identical whichever worker renders them.
+"""
+from __future__ import annotations
+
+import glob
+import math
+import os
+import signal
+import sys
+import time
+import traceback
+from collections.abc import Mapping
+from typing import Any, Callable, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from . import annotations as A
+from . import primitives as P
+from . import scenario as S
+from . import writers as W
+from ._core import PinholeCamera, Scene, SynthgenError, load_image_plugin
+
+__all__ = ["FrameRenderer", "write_frame", "assemble_coco", "write_yolo_dataset_yaml", "run", "frame_name",
+           "completed_frames", "LocalExecutor", "DaskExecutor", "RunSummary"]
+
+#: Objects may extend this far beyond the image on each side (fraction of the image size)
+#: and still be measured for truncation.
+TRUNCATION_PAD = 0.5
+
+
+def frame_name(k: int) -> str:
+    return f"{int(k):06d}"
+
+
+def _rot_y(deg: float) -> np.ndarray:
+    return P.rotate([0.0, 1.0, 0.0], float(deg))
+
+
+def _look_at(eye, target) -> np.ndarray:
+    return np.asarray(PinholeCamera.look_at(list(map(float, eye)), list(map(float, target)), [0.0, 1.0, 0.0]),
+                      np.float64)
+
+
+def _sun_direction(elevation: float, azimuth: float) -> List[float]:
+    # The sky model's convention (light/sky.cpp): x = cos(el) sin(az), y = sin(el), z = -cos(el) cos(az).
+    el, az = math.radians(elevation), math.radians(azimuth)
+    return [math.cos(el) * math.sin(az), math.sin(el), -math.cos(el) * math.cos(az)]
+
+
+def light_params(light: Mapping[str, Any]) -> Tuple[str, Dict[str, Any]]:
+    """synthgen light plugin (type, params) of a sampled scenario light."""
+    t = light["type"]
+    if t == "sky":
+        return "sky", {"elevation": light["elevation"], "azimuth": light["azimuth"], "turbidity": light["turbidity"],
+                       "strength": light["strength"]}
+    if t == "envmap":
+        return "envmap", {"filename": light["file"], "rotation": light["rotation"], "strength": light["strength"],
+                          "visible": light["visible"]}
+    if t == "sun":
+        return "sun", {"direction": _sun_direction(light["elevation"], light["azimuth"]),
+                       "irradiance": list(light["irradiance"]), "angular_diameter": light["angular_diameter"]}
+    if t == "environment":
+        return "environment", {"radiance": list(light["radiance"])}
+    raise SynthgenError(f"unknown light type {t!r}")
+
+
+def material_params(m: Mapping[str, Any]) -> Tuple[str, Dict[str, Any]]:
+    """synthgen material plugin (type, params) of a sampled scenario material."""
+    p = {k: (list(v) if isinstance(v, tuple) else v) for k, v in m.items() if k != "type" and v is not None}
+    return m["type"], p
+
+
+class _Shape:
+    """A mesh in the worker's scene with its object-space bounds."""
+
+    def __init__(self, mesh_id: int, lo: np.ndarray, hi: np.ndarray, own_materials: bool):
+        self.mesh_id, self.lo, self.hi, self.own_materials = mesh_id, lo, hi, own_materials
+
+
+class FrameRenderer:
+    """Renders frames of one scenario, keeping the scene (meshes and their BVHs, the
+    ground, material slots) across frames; per frame only instances, materials, lights
+    and the camera change."""
+
+    def __init__(self, scenario: S.Scenario, threads: int = 0):
+        self.sc = scenario
+        self.threads = int(threads)
+        self.scene = Scene()
+        self._shapes: Dict[Any, _Shape] = {}
+        self._instances: List[int] = []
+        self._lights: List[int] = []
+        self._materials: List[int] = []
+        self._ground_instance: Optional[int] = None
+        self._ground_material: Optional[int] = None
+        g = scenario.spec["ground"]
+        if g["enabled"]:
+            pl = P.plane(float(g["size"]), float(g["size"]))
+            gm = self.scene.add_mesh(pl["positions"], pl["indices"], normals=pl["normals"], uvs=pl["uvs"], name="ground")
+            self._ground_instance = self.scene.add_instance(gm, np.eye(4), class_id=0, instance_id=0)
+
+    # -- shapes -----------------------------------------------------------------------
+    def _shape(self, obj: Mapping[str, Any]) -> _Shape:
+        key = ("mesh", obj["mesh"]) if obj.get("mesh") else ("primitive", obj["primitive"])
+        if key in self._shapes:
+            return self._shapes[key]
+        if key[0] == "mesh":
+            r = self.scene.load_mesh_file(key[1])
+            arr = self.scene.mesh_arrays(r["mesh_id"])
+            pos = np.asarray(arr["positions"], np.float64)
+            shape = _Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True)
+        else:
+            m = P.box((1.0, 1.0, 1.0)) if key[1] == "box" else P.uv_sphere(0.5, 48, 24)
+            mid = self.scene.add_mesh(m["positions"], m["indices"], normals=m["normals"], uvs=m["uvs"], name=key[1])
+            shape = _Shape(mid, np.full(3, -0.5), np.full(3, 0.5), False)
+        self._shapes[key] = shape
+        return shape
+
+    def _object_local(self, obj: Mapping[str, Any], shape: _Shape) -> Tuple[np.ndarray, float, np.ndarray]:
+        """(object_from_shape scale/lift matrix, footprint radius, box size in metres)."""
+        size = np.asarray(obj["size"], np.float64) * float(obj["scale"])
+        if shape.own_materials:  # meshes keep their proportions: size is a per-axis scale factor
+            ext = (shape.hi - shape.lo)
+            dims = ext * size
+        else:
+            dims = size.copy()
+            if obj.get("primitive") == "sphere":
+                dims = np.full(3, size[0])
+        s = dims / np.maximum(shape.hi - shape.lo, 1e-12)
+        centre = 0.5 * (shape.lo + shape.hi)
+        # Scale about the bounds' centre, then lift so the lowest point touches y = 0.
+        m = np.eye(4)
+        m[:3, :3] = np.diag(s)
+        m[:3, 3] = -centre * s + np.array([0.0, 0.5 * dims[1], 0.0])
+        radius = 0.5 * math.hypot(dims[0], dims[2])
+        return m, radius, dims
+
+    # -- per frame ----------------------------------------------------------------------
+    def _camera(self, cam: Mapping[str, Any], rng: np.random.Generator) -> PinholeCamera:
+        w, h = self.sc.resolution
+        pose = cam["pose"]
+        if pose["type"] == "orbit":
+            target = np.asarray(pose["target"], np.float64)
+            j = float(pose["jitter"])
+            if j > 0:
+                target = target + rng.uniform(-j, j, 3)
+            el, az = math.radians(pose["elevation"]), math.radians(pose["azimuth"])
+            d = float(pose["distance"])
+            eye = target + d * np.array([math.cos(el) * math.sin(az), math.sin(el), -math.cos(el) * math.cos(az)])
+        else:
+            eye, target = np.asarray(pose["eye"], np.float64), np.asarray(pose["target"], np.float64)
+        wfc = _look_at(eye, target)
+        if cam.get("fx") is not None:
+            fx = float(cam["fx"])
+            fy = float(cam["fy"]) if cam.get("fy") is not None else fx
+            cx = float(cam["cx"]) if cam.get("cx") is not None else 0.5 * w
+            cy = float(cam["cy"]) if cam.get("cy") is not None else 0.5 * h
+            return PinholeCamera(fx, fy, cx, cy, w, h, wfc)
+        return PinholeCamera.from_fov(float(cam["fov_y"]), w, h, wfc)
+
+    def _set_lights(self, lights: Sequence[Mapping[str, Any]]) -> None:
+        for lid in self._lights:
+            self.scene.remove_light(lid)
+        self._lights = []
+        for light in lights:
+            t, p = light_params(light)
+            self._lights.append(self.scene.add_light(t, p))
+
+    def _material(self, slot: int, m: Mapping[str, Any]) -> int:
+        t, p = material_params(m)
+        while len(self._materials) <= slot:
+            self._materials.append(self.scene.add_material("diffuse", {}))
+        mid = self._materials[slot]
+        self.scene.update_material(mid, t, p)
+        return mid
+
+    def _place(self, objects: List[Dict[str, Any]], rng: np.random.Generator) -> List[Optional[Tuple[float, float]]]:
+        """Positions (x, z) on the ground; None where an object found no free spot."""
+        pl = self.sc.spec["placement"]
+        x0, z0, x1, z1 = pl["region"]
+        placed: List[Tuple[float, float, float]] = []
+        out: List[Optional[Tuple[float, float]]] = []
+        for o in objects:
+            r = o["_radius"]
+            spot = None
+            for _ in range(100):
+                x, z = float(rng.uniform(x0, x1)), float(rng.uniform(z0, z1))
+                if not pl["non_overlapping"] or all(
+                        math.hypot(x - px, z - pz) >= r + pr + pl["margin"] for px, pz, pr in placed):
+                    spot = (x, z)
+                    break
+            if spot is not None:
+                placed.append((spot[0], spot[1], r))
+            out.append(spot)
+        return out
+
+    def _labels(self, camera: PinholeCamera) -> Any:
+        self.scene.set_camera(camera)
+        self.scene.commit()
+        return self.scene.render(spp=1, labels_only=True, threads=self.threads)
+
+    def _amodal(self, camera: PinholeCamera, k: int) -> Tuple[int, int]:
+        """(amodal pixels inside the image, amodal pixels on a canvas padded by
+        TRUNCATION_PAD on every side) of object k rendered alone."""
+        w, h = self.sc.resolution
+        pw, ph = int(round(TRUNCATION_PAD * w)), int(round(TRUNCATION_PAD * h))
+        K = np.asarray(camera.K, np.float64)
+        padded = PinholeCamera(float(K[0, 0]), float(K[1, 1]), float(K[0, 2]) + pw, float(K[1, 2]) + ph,
+                               w + 2 * pw, h + 2 * ph, np.asarray(camera.world_from_camera, np.float64))
+        for i, inst in enumerate(self._instances):
+            self.scene.set_instance_visible(inst, i == k)
+        if self._ground_instance is not None:
+            self.scene.set_instance_visible(self._ground_instance, False)
+        r = self._labels(padded)
+        mask = np.asarray(r.instance_id) == k + 1
+        inside = int(mask[ph:ph + h, pw:pw + w].sum())
+        return inside, int(mask.sum())
+
+    def _show(self, visible: Sequence[bool]) -> None:
+        for inst, v in zip(self._instances, visible):
+            self.scene.set_instance_visible(inst, bool(v))
+        if self._ground_instance is not None:
+            self.scene.set_instance_visible(self._ground_instance, True)
+
+    def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
+        """(arrays, meta, timings) of one frame."""
+        t0 = time.perf_counter()
+        sc = self.sc
+        params = S.sample_frame(sc, frame)
+        layout_rng = S.frame_rng(sc.seed, frame, 1)
+        camera = self._camera(params["camera"], S.frame_rng(sc.seed, frame, 2))
+        self._set_lights(params["lights"])
+        if self._ground_instance is not None:
+            if self._ground_material is None:
+                self._ground_material = self.scene.add_material("diffuse", {})
+            t, p = material_params(params["ground"]["material"])
+            self.scene.update_material(self._ground_material, t, p)
+            self.scene.set_instance_material(self._ground_instance, self._ground_material)
+        # Instances of this frame (previous ones removed; slots only grow, so the order of a
+        # frame's instances, and with it every light list, is the same on every worker).
+        for inst in self._instances:
+            self.scene.remove_instance(inst)
+        self._instances = []
+        objects = params["objects"]
+        for k, o in enumerate(objects):
+            shape = self._shape(o)
+            local, radius, dims = self._object_local(o, shape)
+            o["_local"], o["_radius"], o["_dims"] = local, radius, dims
+            mat = -1
+            if o.get("material") is not None:
+                mat = self._material(k, o["material"])
+            elif not shape.own_materials:
+                mat = self._material(k, {"type": "diffuse", "albedo": (0.5, 0.5, 0.5)})
+            inst = self.scene.add_instance(shape.mesh_id, np.eye(4), class_id=o["class_index"] + 1,
+                                           instance_id=k + 1, material_id=mat)
+            self._instances.append(inst)
+        t_update = time.perf_counter()
+
+        # Layouts: retry until every placed object meets the visibility criteria.
+        pl = sc.spec["placement"]
+        need_amodal = pl["min_visible_fraction"] > 0.0
+        best = None
+        attempts = 0
+        for attempt in range(pl["max_retries"] + 1):
+            attempts = attempt + 1
+            spots = self._place(objects, layout_rng)
+            for k, (o, spot) in enumerate(zip(objects, spots)):
+                if spot is None:
+                    continue
+                o["_world"] = P.translate([spot[0], 0.0, spot[1]]) @ _rot_y(o["yaw"]) @ o["_local"]
+                self.scene.set_instance_transform(self._instances[k], o["_world"].astype(np.float32))
+            self._show([s is not None for s in spots])
+            ids = np.asarray(self._labels(camera).instance_id)
+            counts = np.bincount(ids.ravel(), minlength=len(objects) + 1)
+            fails = []
+            for k, spot in enumerate(spots):
+                if spot is None:
+                    fails.append((k, "no free spot in the placement region"))
+                elif counts[k + 1] < max(1, pl["min_pixels"]):
+                    fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {pl['min_pixels']}"))
+            if need_amodal and not fails:
+                for k in range(len(objects)):
+                    inside, _ = self._amodal(camera, k)
+                    frac = counts[k + 1] / inside if inside else 0.0
+                    if frac < pl["min_visible_fraction"]:
+                        fails.append((k, f"visible fraction {frac:.3f} < {pl['min_visible_fraction']}"))
+                self._show([s is not None for s in spots])
+            if best is None or len(fails) < len(best[1]):
+                best = (spots, fails, [o.get("_world") for o in objects])
+            if not fails:
+                break
+        spots, fails, worlds = best
+        dropped = {k: reason for k, reason in fails}
+        for k, o in enumerate(objects):
+            if worlds[k] is not None:
+                o["_world"] = worlds[k]
+                self.scene.set_instance_transform(self._instances[k], worlds[k].astype(np.float32))
+        keep = [spots[k] is not None and k not in dropped for k in range(len(objects))]
+        t_layout = time.perf_counter()
+
+        # Amodal masks of the kept objects, then the final render.
+        amodal = {}
+        for k in range(len(objects)):
+            if keep[k]:
+                amodal[k] = self._amodal(camera, k)
+        self._show(keep)
+        self.scene.set_camera(camera)
+        self.scene.commit()
+        rs = sc.spec["render"]
+        render_seed = int(np.random.SeedSequence([sc.seed, int(frame), 3]).generate_state(1, np.uint64)[0])
+        res = self.scene.render(spp=rs["spp"], max_depth=rs["max_depth"], rr_depth=rs["rr_depth"], seed=render_seed,
+                                threads=self.threads)
+        t_render = time.perf_counter()
+
+        arrays = {"rgb": np.asarray(res.rgb), "depth": np.asarray(res.depth),
+                  "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id)}
+        records = self._object_records(objects, keep, dropped, amodal, arrays["instance_id"], camera)
+        meta = {
+            "format": "synthgen-dataset-frame", "format_version": 1, "frame": int(frame),
+            "scenario_seed": sc.seed, "render_seed": render_seed, "scenario_sha256": sc.sha256,
+            "image_size": list(sc.resolution), "camera": W.camera_meta(camera),
+            "render": dict(rs), "layout_attempts": attempts,
+            "lights": [dict(zip(("type", "params"), light_params(li))) for li in params["lights"]],
+            "objects": records, "sampled": params["sampled"],
+            "class_names": list(sc.class_names),
+        }
+        timings = {"update_s": t_update - t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
+        return arrays, meta, timings
+
+    def _object_records(self, objects, keep, dropped, amodal, ids, camera) -> List[Dict[str, Any]]:
+        w, h = self.sc.resolution
+        wfc = np.asarray(camera.world_from_camera, np.float64)
+        cfw = np.linalg.inv(wfc)
+        out = []
+        for k, o in enumerate(objects):
+            rec: Dict[str, Any] = {"index": k, "instance_id": k + 1, "class": self.sc.class_names[o["class_index"]],
+                                   "class_id": o["class_index"] + 1, "kind": o["kind"]}
+            if not keep[k]:
+                rec["dropped"] = dropped.get(k, "no free spot in the placement region")
+                out.append(rec)
+                continue
+            mask = ids == k + 1
+            vis = int(mask.sum())
+            inside, total = amodal[k]
+            rec.update({"visible_pixels": vis, "amodal_pixels": inside,
+                        "occlusion": float(1.0 - vis / inside) if inside else 1.0,
+                        "visible_fraction": float(vis / inside) if inside else 0.0,
+                        "truncation": float(1.0 - inside / total) if total else 1.0,
+                        "bbox": A.mask_bbox(mask)})
+            world = o["_world"]
+            # 3D box: bottom centre, dimensions (h, w, l) = (y, z, x extents), heading = object +x.
+            base = np.array([world[0, 3], 0.0, world[2, 3], 1.0])  # the footprint centre on the ground
+            loc_cam = (cfw @ base)[:3]
+            heading = cfw[:3, :3] @ (world[:3, :3] @ np.array([1.0, 0.0, 0.0]))
+            ry = math.atan2(-heading[2], heading[0])
+            dims = o["_dims"]
+            rec.update({"world_from_object": world.tolist(), "dimensions_hwl": [float(dims[1]), float(dims[2]),
+                                                                                 float(dims[0])],
+                        "location_camera": [float(v) for v in loc_cam], "rotation_y": float(A.wrap_angle(ry)),
+                        "alpha": float(A.wrap_angle(ry - math.atan2(loc_cam[0], loc_cam[2])))})
+            out.append(rec)
+        return out
+
+
+# ---------------------------------------------------------------------------------------
+# Writing (pure: arrays + meta -> files)
+
+OUTPUT_DIRS = {"rgb": ("images", ".png"), "rgb_exr": ("images", ".exr"), "depth": ("depth", ".exr"),
+               "depth16": ("depth16", ".png"), "instance": ("instance", ".png"), "semantic": ("semantic", ".png"),
+               "yolo": ("labels", ".txt"), "kitti": ("kitti", ".txt"), "meta": ("meta", ".json")}
+
+
+def _write_text(path: str, text: str) -> str:
+    tmp = W._temp_path(path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+        W._commit(tmp, path)
+    except BaseException:
+        W._discard(tmp)
+        raise
+    return path
+
+
+def frame_annotations(meta: Mapping[str, Any], instance_id: np.ndarray) -> List[Dict[str, Any]]:
+    """COCO annotations (image_id = frame, ids assigned later) of a frame's visible objects."""
+    anns = []
+    for o in meta["objects"]:
+        if o.get("dropped") or not o.get("visible_pixels"):
+            continue
+        a = A.coco_annotation(1, int(meta["frame"]), int(o["class_id"]), instance_id == o["instance_id"],
+                              extra={"instance_id": o["instance_id"], "occlusion": o["occlusion"],
+                                     "truncation": o["truncation"]})
+        if a is not None:
+            anns.append(a)
+    return anns
+
+
+def write_frame(out_dir: str, frame: int, arrays: Mapping[str, np.ndarray], meta: Mapping[str, Any],
+                outputs: Sequence[str]) -> Dict[str, str]:
+    """Writes one frame's files (``outputs`` kinds; meta always, last). Returns {kind: path}."""
+    name = frame_name(frame)
+    path = lambda kind: os.path.join(out_dir, OUTPUT_DIRS[kind][0], name + OUTPUT_DIRS[kind][1])  # noqa: E731
+    for kind in (set(outputs) | {"meta"}) & set(OUTPUT_DIRS):
+        os.makedirs(os.path.dirname(path(kind)), exist_ok=True)
+    w, h = meta["image_size"]
+    ids = np.asarray(arrays["instance_id"])
+    files: Dict[str, str] = {}
+    if "rgb" in outputs:
+        files["rgb"] = W.write_srgb_png(path("rgb"), arrays["rgb"])
+    if "rgb_exr" in outputs:
+        files["rgb_exr"] = W.write_exr(path("rgb_exr"), arrays["rgb"])
+    depth = np.asarray(arrays["depth"], np.float32)
+    if "depth" in outputs:
+        files["depth"] = W.write_exr(path("depth"), depth)
+    if "depth16" in outputs:
+        mm = np.where(np.isfinite(depth), np.round(depth * 1000.0), 0.0)
+        files["depth16"] = W.write_id_png(path("depth16"), np.where(mm > 65535, 0, mm).astype(np.uint16))
+    if "instance" in outputs:
+        files["instance"] = W.write_id_png(path("instance"), ids)
+    if "semantic" in outputs:
+        files["semantic"] = W.write_id_png(path("semantic"), arrays["class_id"])
+    visible = [o for o in meta["objects"] if not o.get("dropped") and o.get("visible_pixels")]
+    if "yolo" in outputs:
+        lines = [A.yolo_line(o["class_id"] - 1, o["bbox"], w, h) for o in visible]
+        files["yolo"] = _write_text(path("yolo"), "".join(line + "\n" for line in lines))
+    if "kitti" in outputs:
+        lines = [A.kitti_line(o["class"], o["bbox"], truncated=o["truncation"],
+                              occluded=A.kitti_occlusion_level(o["visible_fraction"]), alpha=o["alpha"],
+                              dimensions=o["dimensions_hwl"], location=o["location_camera"],
+                              rotation_y=o["rotation_y"]) for o in visible]
+        files["kitti"] = _write_text(path("kitti"), "".join(line + "\n" for line in lines))
+    meta = dict(meta)
+    meta["coco"] = {"image": {"id": int(frame), "file_name": f"images/{name}.png", "width": int(w), "height": int(h)},
+                    "annotations": frame_annotations(meta, ids) if "coco" in outputs else []}
+    meta["files"] = {k: os.path.relpath(v, out_dir) for k, v in files.items()}
+    files["meta"] = W.write_json(path("meta"), meta)
+    return files
+
+
+def completed_frames(out_dir: str) -> List[int]:
+    """Frames whose meta file exists (the last file written for a frame)."""
+    out = []
+    for p in glob.glob(os.path.join(out_dir, "meta", "[0-9]" * 6 + ".json")):
+        out.append(int(os.path.basename(p)[:6]))
+    return sorted(out)
+
+
+def remove_temporaries(out_dir: str) -> int:
+    """Deletes temporary files left by an interrupted run; returns how many."""
+    n = 0
+    for p in glob.glob(os.path.join(out_dir, "*", ".*.tmp*")) + glob.glob(os.path.join(out_dir, ".*.tmp*")):
+        try:
+            os.unlink(p)
+            n += 1
+        except OSError:
+            pass
+    return n
+
+
+def assemble_coco(out_dir: str, class_names: Sequence[str], frames: Optional[Iterable[int]] = None) -> str:
+    """annotations/coco.json from the per-frame records in meta/*.json."""
+    import json
+
+    images, anns = [], []
+    for k in sorted(frames if frames is not None else completed_frames(out_dir)):
+        with open(os.path.join(out_dir, "meta", frame_name(k) + ".json"), encoding="utf-8") as f:
+            meta = json.load(f)
+        images.append(meta["coco"]["image"])
+        anns.extend(meta["coco"]["annotations"])
+    ds = A.coco_dataset(images, anns, class_names, info={"description": "synthgen dataset", "version": "1"})
+    path = os.path.join(out_dir, "annotations", "coco.json")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    return W.write_json(path, ds)
+
+
+def write_yolo_dataset_yaml(out_dir: str, class_names: Sequence[str]) -> str:
+    import yaml
+
+    text = yaml.safe_dump({"path": os.path.abspath(out_dir), "train": "images", "val": "images",
+                           "names": {i: n for i, n in enumerate(class_names)}}, sort_keys=False)
+    return _write_text(os.path.join(out_dir, "dataset.yaml"), text)
+
+
+# ---------------------------------------------------------------------------------------
+# Execution: one task function for every executor
+
+_WORKER: Dict[str, Any] = {}
+
+
+def render_task(scenario_path: str, out_dir: str, frame: int, threads: int = 0) -> Dict[str, Any]:
+    """Renders and writes one frame in the calling process, reusing this process's
+    FrameRenderer for the same scenario. Returns {frame, ok, error, timings}."""
+    try:
+        key = (os.path.abspath(scenario_path), threads)
+        fr = _WORKER.get("renderer")
+        if fr is None or _WORKER.get("key") != key:
+            load_image_plugin()
+            fr = FrameRenderer(S.load_scenario(scenario_path), threads)
+            _WORKER.update(renderer=fr, key=key, frames=0)
+        t0 = time.perf_counter()
+        arrays, meta, timings = fr.render(frame)
+        t1 = time.perf_counter()
+        write_frame(out_dir, frame, arrays, meta, fr.sc.spec["outputs"])
+        timings["write_s"] = time.perf_counter() - t1
+        timings["total_s"] = time.perf_counter() - t0
+        _WORKER["frames"] += 1
+        dropped = [o["dropped"] for o in meta["objects"] if o.get("dropped")]
+        return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid()}
+    except Exception as e:  # reported per frame; the run goes on
+        return {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",
+                "traceback": traceback.format_exc(), "pid": os.getpid()}
+
+
+def _init_worker() -> None:
+    # Ctrl-C is handled by the parent, which then terminates the pool.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class LocalExecutor:
+    """Frames on a pool of worker processes on this machine (``workers`` = 1: in this
+    process). Workers keep their scene across frames and are replaced after ``recycle``
+    frames, so memory cannot grow without bound."""
+
+    def __init__(self, workers: int = 1, recycle: int = 200):
+        self.workers = max(1, int(workers))
+        self.recycle = max(1, int(recycle))
+        self._pool = None
+
+    def map(self, fn: Callable, args: List[tuple]) -> Iterator[Dict[str, Any]]:
+        if self.workers == 1:
+            for a in args:
+                yield fn(*a)
+            return
+        import multiprocessing as mp
+
+        ctx = mp.get_context("spawn")  # no fork of a process with TBB/Embree threads
+        self._pool = ctx.Pool(self.workers, initializer=_init_worker, maxtasksperchild=self.recycle)
+        try:
+            for r in self._pool.imap_unordered(_star, [(fn, a) for a in args]):
+                yield r
+            self._pool.close()
+        except BaseException:
+            self._pool.terminate()
+            raise
+        finally:
+            self._pool.join()
+
+    def shutdown(self) -> None:
+        if self._pool is not None:
+            self._pool.terminate()
+
+
+def _star(fa):
+    fn, a = fa
+    return fn(*a)
+
+
+class DaskExecutor:
+    """Frames on a Dask distributed cluster (``address`` of a scheduler, or a
+    ``distributed.Client``). Workers keep their scene across frames like local ones."""
+
+    def __init__(self, address: Any):
+        from distributed import Client
+
+        self.client = address if isinstance(address, Client) else Client(address)
+        self._own = not isinstance(address, Client)
+
+    def map(self, fn: Callable, args: List[tuple]) -> Iterator[Dict[str, Any]]:
+        from distributed import as_completed
+
+        futures = [self.client.submit(fn, *a, pure=False, key=f"synthgen-frame-{a[2]}-{time.time_ns()}") for a in args]
+        for fut in as_completed(futures):
+            yield fut.result()
+
+    def shutdown(self) -> None:
+        if self._own:
+            self.client.close()
+
+
+class RunSummary(dict):
+    """frames, failures (frame, reason), mean seconds per frame and per stage."""
+
+    def text(self) -> str:
+        lines = [f"frames rendered: {self['rendered']} (skipped as already complete: {self['skipped']}), "
+                 f"failures: {len(self['failures'])}"]
+        for f in self["failures"][:20]:
+            lines.append(f"  frame {f['frame']}: {f['error']}")
+        if self["rendered"]:
+            st = ", ".join(f"{k[:-2]} {v:.3f}" for k, v in self["stage_s"].items())
+            lines.append(f"mean seconds/frame: {self['mean_s_per_frame']:.3f} (per stage: {st}); "
+                         f"wall {self['wall_s']:.1f} s, {self['frames_per_s']:.3f} frames/s")
+        if self.get("interrupted"):
+            lines.append("interrupted: completed frames are kept; run again with --resume")
+        return "\n".join(lines)
+
+
+def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: int = 1,
+        scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
+        recycle: int = 200, progress: bool = True, threads: Optional[int] = None) -> RunSummary:
+    """Renders a scenario into ``out_dir`` (see the module docstring for the layout)."""
+    sc = S.load_scenario(scenario_path)  # validate before anything renders
+    n = int(count) if count is not None else sc.count
+    frames = list(only) if only is not None else list(range(n))
+    os.makedirs(out_dir, exist_ok=True)
+    done = set(completed_frames(out_dir))
+    if done and not resume and only is None:
+        raise SynthgenError(f"{out_dir} already holds {len(done)} frame(s); use --resume to complete it "
+                            f"or choose another output directory")
+    removed = remove_temporaries(out_dir)
+    todo = [k for k in frames if not (resume and k in done)] if only is None else frames
+    if threads is None:
+        threads = max(1, (os.cpu_count() or 1) // max(1, workers)) if (workers > 1 or scheduler) else 0
+    if sc.spec["render"]["threads"]:
+        threads = sc.spec["render"]["threads"]
+    executor = DaskExecutor(scheduler) if scheduler is not None else LocalExecutor(workers, recycle)
+    args = [(os.path.abspath(scenario_path), os.path.abspath(out_dir), k, threads) for k in todo]
+    results, failures = [], []
+    interrupted = False
+    t0 = time.perf_counter()
+    bar = None
+    if progress:
+        try:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(todo), unit="frame", desc="synthgen", dynamic_ncols=True)
+        except ImportError:
+            bar = None
+    try:
+        for r in executor.map(render_task, args):
+            (results if r["ok"] else failures).append(r)
+            if bar is not None:
+                bar.update(1)
+                if not r["ok"]:
+                    bar.write(f"frame {r['frame']} failed: {r['error']}")
+    except KeyboardInterrupt:
+        interrupted = True
+        executor.shutdown()
+    finally:
+        if bar is not None:
+            bar.close()
+        if scheduler is not None and not interrupted:
+            executor.shutdown()
+    wall = time.perf_counter() - t0
+    complete = completed_frames(out_dir)
+    if "coco" in sc.spec["outputs"]:
+        assemble_coco(out_dir, sc.class_names, [k for k in complete if k < n or only is not None])
+    if "yolo" in sc.spec["outputs"]:
+        write_yolo_dataset_yaml(out_dir, sc.class_names)
+    stages: Dict[str, float] = {}
+    for r in results:
+        for k, v in r["timings"].items():
+            stages[k] = stages.get(k, 0.0) + v
+    m = max(1, len(results))
+    summary = RunSummary(
+        rendered=len(results), skipped=len(frames) - len(todo), failures=[{"frame": f["frame"], "error": f["error"]}
+                                                                         for f in failures],
+        wall_s=wall, frames_per_s=len(results) / wall if wall > 0 else 0.0,
+        mean_s_per_frame=stages.get("total_s", 0.0) / m,
+        stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
+        interrupted=interrupted, temporaries_removed=removed, complete=len(complete))
+    W.write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
+    return summary
