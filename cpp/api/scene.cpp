@@ -171,6 +171,15 @@ void Scene::set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instanc
   m_structure_dirty = true;
 }
 
+void Scene::set_instance_mesh(uint32_t id, uint32_t mesh_id) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  get_slot(m_meshes, mesh_id, "mesh");
+  if (e.mesh_id == mesh_id) return;
+  e.mesh_id = mesh_id;
+  e.dirty = true;
+  m_structure_dirty = true;
+}
+
 void Scene::set_instance_material(uint32_t id, int64_t material_id) {
   InstanceEntry& e = get_slot(m_instances, id, "instance");
   check_material_id(material_id, "set_instance_material");

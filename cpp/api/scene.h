@@ -81,6 +81,9 @@ class Scene {
   void set_instance_transform(uint32_t id, const Transform& world_from_object);
   void set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instance_id);
   void set_instance_material(uint32_t id, int64_t material_id);
+  /// Points an instance at another mesh (no BVH build: the mesh's BVH exists; only the top
+  /// level is rebuilt). Lets a caller keep a fixed pool of instance ids across frames.
+  void set_instance_mesh(uint32_t id, uint32_t mesh_id);
   void remove_instance(uint32_t id);
   /// Hides an instance from every ray (camera, shadow, labels) and from light sampling
   /// without removing it: showing it again needs no BVH build (only the top level). Used for

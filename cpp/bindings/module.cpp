@@ -327,6 +327,8 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("instance"), py::arg("world_from_object"))
       .def("set_instance_labels", &Scene::set_instance_labels, py::arg("instance"), py::arg("class_id"), py::arg("instance_id"))
       .def("set_instance_material", &Scene::set_instance_material, py::arg("instance"), py::arg("material_id"))
+      .def("set_instance_mesh", &Scene::set_instance_mesh, py::arg("instance"), py::arg("mesh_id"),
+           "Points an instance at another mesh (no BVH build, only the top level).")
       .def("remove_instance", &Scene::remove_instance, py::arg("instance"))
       .def("set_instance_visible", &Scene::set_instance_visible, py::arg("instance"), py::arg("visible"),
            "Hides (or shows again) an instance for every ray and for light sampling, keeping its BVH:\n"

@@ -109,7 +109,8 @@ class FrameRenderer:
         self.threads = int(threads)
         self.scene = Scene()
         self._shapes: Dict[Any, _Shape] = {}
-        self._instances: List[int] = []
+        self._pool: List[int] = []        # instance ids, reused frame after frame
+        self._instances: List[int] = []   # this frame's objects (a prefix of the pool)
         self._lights: List[int] = []
         self._materials: List[int] = []
         self._ground_instance: Optional[int] = None
@@ -257,12 +258,14 @@ class FrameRenderer:
             t, p = material_params(params["ground"]["material"])
             self.scene.update_material(self._ground_material, t, p)
             self.scene.set_instance_material(self._ground_instance, self._ground_material)
-        # Instances of this frame (previous ones removed; slots only grow, so the order of a
-        # frame's instances, and with it every light list, is the same on every worker).
-        for inst in self._instances:
-            self.scene.remove_instance(inst)
-        self._instances = []
+        # Instances of this frame: a pool of instance ids, id k always for the frame's object k
+        # (so instance order, and with it every light list, is the same on every worker
+        # whatever it rendered before); ids beyond this frame's objects are hidden. The pool
+        # only grows to the largest object count, so long runs do not accumulate slots.
         objects = params["objects"]
+        for inst in self._pool[len(objects):]:
+            self.scene.set_instance_visible(inst, False)
+        self._instances = []
         for k, o in enumerate(objects):
             shape = self._shape(o)
             local, radius, dims = self._object_local(o, shape)
@@ -272,8 +275,15 @@ class FrameRenderer:
                 mat = self._material(k, o["material"])
             elif not shape.own_materials:
                 mat = self._material(k, {"type": "diffuse", "albedo": (0.5, 0.5, 0.5)})
-            inst = self.scene.add_instance(shape.mesh_id, np.eye(4), class_id=o["class_index"] + 1,
-                                           instance_id=k + 1, material_id=mat)
+            if k < len(self._pool):
+                inst = self._pool[k]
+                self.scene.set_instance_mesh(inst, shape.mesh_id)
+                self.scene.set_instance_material(inst, mat)
+                self.scene.set_instance_labels(inst, o["class_index"] + 1, k + 1)
+            else:
+                inst = self.scene.add_instance(shape.mesh_id, np.eye(4), class_id=o["class_index"] + 1,
+                                               instance_id=k + 1, material_id=mat)
+                self._pool.append(inst)
             self._instances.append(inst)
         t_update = time.perf_counter()
 

@@ -162,3 +162,22 @@ def test_dask_local_cluster_equals_local_run(reference, tmp_path):
         if k.startswith("annotations/"):
             continue  # assembled from 4 frames here, 6 in the reference
         assert ref[k] == v, k
+
+
+def test_worker_scene_stays_bounded_over_many_frames():
+    from synthgen import scenario
+
+    fr = runner.FrameRenderer(scenario.load_scenario(TINY))
+    for k in range(40):
+        fr.render(k)
+    stats = fr.scene.commit_stats
+    # Ground + at most 2 boxes + 2 balls; one BVH per shape (ground, box, sphere), never rebuilt.
+    assert fr.scene.instance_count() <= 5
+    assert stats["mesh_bvh_builds"] == 3, stats
+    # The same frame from a worker that rendered 40 other frames equals a fresh worker's.
+    fresh = runner.FrameRenderer(scenario.load_scenario(TINY))
+    a, m, _ = fr.render(17)
+    b, n, _ = fresh.render(17)
+    for key in a:
+        np.testing.assert_array_equal(a[key], b[key])
+    assert m == n
