@@ -118,6 +118,17 @@ def build_parser() -> argparse.ArgumentParser:
     _debug_option(p, top=False)
     p.set_defaults(func=_cmd_validate)
 
+    p = sub.add_parser("assets", help="list or fetch assets of the manifest",
+                       description="List the assets of assets_manifest/*.yaml, or fetch them into the cache "
+                                   "($SYNTHGEN_CACHE or ~/.cache/synthgen), verifying checksums.")
+    asub = p.add_subparsers(dest="assets_command", metavar="ACTION", required=True)
+    q = asub.add_parser("list", help="list asset ids")
+    q.set_defaults(func=_cmd_assets_list)
+    q = asub.add_parser("fetch", help="fetch assets (default: all) into the cache")
+    q.add_argument("ids", nargs="*", metavar="ID")
+    q.set_defaults(func=_cmd_assets_fetch)
+    _debug_option(p, top=False)
+
     p = sub.add_parser("schema", help="describe the scene file format",
                        description="Print every key of the scene file format with its type, default, range "
                                    "and meaning.")
@@ -214,6 +225,21 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     sc = scenario.load_scenario(args.scenario)
     print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "
           f"classes: {', '.join(sc.class_names)})")
+    return 0
+
+
+def _cmd_assets_list(args: argparse.Namespace) -> int:
+    from . import assets
+
+    print("\n".join(assets.list_assets()))
+    return 0
+
+
+def _cmd_assets_fetch(args: argparse.Namespace) -> int:
+    from . import assets
+
+    for i, p in assets.fetch(args.ids or None).items():
+        print(f"{i}: {p}")
     return 0
 
 

@@ -76,7 +76,13 @@ def light_params(light: Mapping[str, Any]) -> Tuple[str, Dict[str, Any]]:
         return "sky", {"elevation": light["elevation"], "azimuth": light["azimuth"], "turbidity": light["turbidity"],
                        "strength": light["strength"]}
     if t == "envmap":
-        return "envmap", {"filename": light["file"], "rotation": light["rotation"], "strength": light["strength"],
+        if light.get("asset"):
+            from . import assets
+
+            path = assets.resolve(light["asset"])
+        else:
+            path = light["file"]
+        return "envmap", {"filename": path, "rotation": light["rotation"], "strength": light["strength"],
                           "visible": light["visible"]}
     if t == "sun":
         return "sun", {"direction": _sun_direction(light["elevation"], light["azimuth"]),
@@ -97,6 +103,7 @@ class _Shape:
 
     def __init__(self, mesh_id: int, lo: np.ndarray, hi: np.ndarray, own_materials: bool):
         self.mesh_id, self.lo, self.hi, self.own_materials = mesh_id, lo, hi, own_materials
+        self.unit = 1.0  # metres per mesh unit
 
 
 class FrameRenderer:
@@ -123,14 +130,25 @@ class FrameRenderer:
 
     # -- shapes -----------------------------------------------------------------------
     def _shape(self, obj: Mapping[str, Any]) -> _Shape:
-        key = ("mesh", obj["mesh"]) if obj.get("mesh") else ("primitive", obj["primitive"])
+        if obj.get("asset"):
+            key = ("asset", obj["asset"])
+        else:
+            key = ("mesh", obj["mesh"]) if obj.get("mesh") else ("primitive", obj["primitive"])
         if key in self._shapes:
             return self._shapes[key]
-        if key[0] == "mesh":
-            r = self.scene.load_mesh_file(key[1])
+        if key[0] in ("mesh", "asset"):
+            unit = 1.0
+            path = key[1]
+            if key[0] == "asset":
+                from . import assets
+
+                path = assets.resolve(key[1])
+                unit = float(assets.entry(key[1]).get("scale", 1.0))
+            r = self.scene.load_mesh_file(path)
             arr = self.scene.mesh_arrays(r["mesh_id"])
             pos = np.asarray(arr["positions"], np.float64)
             shape = _Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True)
+            shape.unit = unit
         else:
             m = P.box((1.0, 1.0, 1.0)) if key[1] == "box" else P.uv_sphere(0.5, 48, 24)
             mid = self.scene.add_mesh(m["positions"], m["indices"], normals=m["normals"], uvs=m["uvs"], name=key[1])
@@ -142,7 +160,7 @@ class FrameRenderer:
         """(object_from_shape scale/lift matrix, footprint radius, box size in metres)."""
         size = np.asarray(obj["size"], np.float64) * float(obj["scale"])
         if shape.own_materials:  # meshes keep their proportions: size is a per-axis scale factor
-            ext = (shape.hi - shape.lo)
+            ext = (shape.hi - shape.lo) * shape.unit  # in metres (manifest `scale`)
             dims = ext * size
         else:
             dims = size.copy()

@@ -219,7 +219,8 @@ LIGHT = Record(
                 "turbidity": R(Number(3.0, min=1.7, max=10.0)),
                 "strength": R(Number(0.02, min=0.0, max=1e6, doc="radiance scale; the Preetham model is in "
                                                                  "physical units, 0.02 maps a clear day to display range"))},
-        "envmap": {"file": FilePath(REQUIRED, doc="equirectangular HDR/EXR image"),
+        "envmap": {"file": FilePath(None, doc="equirectangular HDR/EXR image"),
+                   "asset": R(String(None, doc="asset id (kind hdr) instead of file")),
                    "rotation": R(Number(0.0, min=-360.0, max=720.0, doc="degrees about +y")),
                    "strength": R(Number(1.0, min=0.0, max=1e6)), "visible": Bool(True)},
         "sun": {"elevation": R(Number(45.0, min=-10.0, max=90.0)), "azimuth": R(Number(0.0, min=-360.0, max=720.0)),
@@ -250,12 +251,13 @@ OBJECT = Record(
      "count": R(Integer(1, min=0, max=1000, doc="instances per frame")),
      "primitive": R(Choice(["box", "sphere"], None, doc="built-in shape")),
      "mesh": FilePath(None, doc="mesh file (OBJ, PLY, glTF, GLB)"),
+     "asset": R(String(None, doc="asset id of assets_manifest (kind mesh; `synthgen assets list`)")),
      "size": R(Vector(3, (1.0, 1.0, 1.0), min=0.0, min_open=True, broadcast=True,
                       doc="box size or sphere diameter, metres")),
      "scale": R(Number(1.0, min=0.0, min_open=True, doc="uniform scale of the shape")),
      "yaw": R(Number(0.0, min=-360.0, max=720.0, doc="rotation about +y, degrees")),
      "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None)},
-    one_of=[("primitive", "mesh")], doc="an object kind placed on the ground")
+    one_of=[("primitive", "mesh", "asset")], doc="an object kind placed on the ground")
 
 PLACEMENT = Record(
     {"region": Vector(4, (-3.0, -3.0, 3.0, 3.0), doc="[x_min, z_min, x_max, z_max] on the ground, metres"),
@@ -335,7 +337,39 @@ class Scenario:
         return tuple(self.spec["resolution"])  # type: ignore[return-value]
 
 
+def _check_assets(tree: Any, loc: Loc, ctx: ValidationContext, kind: str) -> None:
+    """Every asset id (constant or among choice options) exists in the manifest with `kind`."""
+    from . import assets
+
+    values = tree.options if isinstance(tree, D.Choice) else [tree]
+    manifest = assets.load_manifest()
+    for v in values:
+        if v is None:
+            continue
+        if isinstance(v, D.Distribution):
+            ctx.error(loc, "asset ids take a constant or a choice")
+        try:
+            e = assets.entry(v, manifest)
+        except assets.AssetError as err:
+            ctx.error(loc, str(err))
+        if e["kind"] != kind:
+            ctx.error(loc, f"asset '{v}' is a {e['kind']}, not a {kind}")
+
+
 def _check(spec: Validated, ctx: ValidationContext) -> None:
+    for i, o in enumerate(spec["objects"]):
+        if "asset" in o.given:
+            _check_assets(o["asset"], o.locs["asset"], ctx, "mesh")
+    lights = spec["lights"]
+    setups = lights.options if isinstance(lights, D.Choice) else [lights]
+    for setup in setups:
+        for li in setup:
+            if isinstance(li, dict) and li.get("type") == "envmap":
+                given = [k for k in ("file", "asset") if li.get(k) is not None]
+                if len(given) != 1:
+                    ctx.error(li.loc, "an envmap light needs exactly one of 'file' or 'asset'")
+                if li.get("asset") is not None:
+                    _check_assets(li["asset"], li.locs["asset"], ctx, "hdr")
     x0, z0, x1, z1 = spec["placement"]["region"]
     if not (x0 < x1 and z0 < z1):
         ctx.error(spec["placement"].locs.get("region", spec.loc), "region must satisfy x_min < x_max and z_min < z_max")
