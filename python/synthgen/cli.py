@@ -112,6 +112,13 @@ def build_parser() -> argparse.ArgumentParser:
     _debug_option(p, top=False)
     p.set_defaults(func=_cmd_run)
 
+    p = sub.add_parser("verify", help="check that a dataset's labels agree with its masks",
+                       description="Check every complete frame of a dataset written by `synthgen run`: COCO RLE "
+                                   "masks, boxes and areas against instance/*.png, semantic classes, YOLO and KITTI.")
+    p.add_argument("dataset", metavar="DIR")
+    _debug_option(p, top=False)
+    p.set_defaults(func=_cmd_verify)
+
     p = sub.add_parser("validate", help="check a scenario file without rendering",
                        description="Validate a scenario file: every error names file, line, column and key.")
     p.add_argument("scenario", metavar="SCENARIO.yaml")
@@ -217,6 +224,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if summary["interrupted"]:
         return EXIT_INTERRUPTED
     return 0 if not summary["failures"] else 1
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from . import runner
+
+    r = runner.verify_dataset(args.dataset)
+    print(f"{args.dataset}: ok: {r['frames']} frames, {r['annotations']} objects; COCO, YOLO and KITTI agree "
+          f"with the masks (classes: {', '.join(r['categories'])})")
+    return 0
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:

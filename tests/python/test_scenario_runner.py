@@ -181,3 +181,19 @@ def test_worker_scene_stays_bounded_over_many_frames():
     for key in a:
         np.testing.assert_array_equal(a[key], b[key])
     assert m == n
+
+
+def test_verify_dataset_accepts_a_run_and_catches_a_wrong_label(reference, tmp_path):
+    r = runner.verify_dataset(reference)
+    assert r["frames"] == 6 and r["annotations"] >= 6
+    import shutil
+
+    bad = str(tmp_path / "bad")
+    shutil.copytree(reference, bad)
+    path = os.path.join(bad, "labels", "000002.txt")
+    lines = open(path).read().splitlines()
+    f = lines[0].split()
+    f[1] = f"{float(f[1]) + 0.1:.6f}"  # shift one YOLO box
+    open(path, "w").write("\n".join([" ".join(f)] + lines[1:]) + "\n")
+    with pytest.raises(ValueError, match="YOLO line 1"):
+        runner.verify_dataset(bad)
