@@ -15,6 +15,8 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 demo: install
 	$(VENV)/bin/synthgen demo -o out/demo
+	$(VENV)/bin/synthgen run scenarios/default.yaml -o out/dataset -n 4 --resume --no-progress
+	$(VENV)/bin/synthgen verify out/dataset
 
 test: install
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

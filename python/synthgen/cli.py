@@ -136,9 +136,10 @@ def build_parser() -> argparse.ArgumentParser:
     q.set_defaults(func=_cmd_assets_fetch)
     _debug_option(p, top=False)
 
-    p = sub.add_parser("schema", help="describe the scene file format",
-                       description="Print every key of the scene file format with its type, default, range "
-                                   "and meaning.")
+    p = sub.add_parser("schema", help="describe the scene file (or scenario) format",
+                       description="Print every key of the scene file format (or, with --scenario, of the scenario "
+                                   "format) with its type, default, range and meaning.")
+    p.add_argument("--scenario", action="store_true", help="the scenario format of `synthgen run`")
     _debug_option(p, top=False)
     p.set_defaults(func=_cmd_schema)
     return parser
@@ -210,7 +211,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _cmd_schema(args: argparse.Namespace) -> int:
     from .scene_file import format_schema
 
-    print(format_schema())
+    if getattr(args, "scenario", False):
+        from .scenario import SCENARIO_SCHEMA
+
+        print(format_schema(SCENARIO_SCHEMA))
+    else:
+        print(format_schema())
     return EXIT_OK
 
 

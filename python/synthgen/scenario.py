@@ -290,7 +290,7 @@ SCENARIO_SCHEMA = Record(
      "description": String("", doc="free text"),
      "seed": Integer(0, min=0, max=(1 << 63) - 1, doc="scenario seed"),
      "count": Integer(10, min=1, max=10 ** 9, doc="number of frames"),
-     "resolution": _Resolution((640, 480)),
+     "resolution": _Resolution((640, 480), doc="image size"),
      "camera": CAMERA,
      "lights": R(ListOf(LIGHT, REQUIRED, min_items=1), doc="lights, or a choice of light set-ups",
                  default=[{"type": "sky"}]),

@@ -1195,8 +1195,11 @@ def format_schema(field: Field = SCENE_SCHEMA, indent: int = 0) -> str:
             lines.append(f"{p}{k}: {f.describe() if not isinstance(f, (Record, MapOf, ListOf)) else f.type_name}"
                          f" ({default_text(rec, k, f)}) - {f.doc}")
             sub = f
-            if isinstance(sub, (MapOf, ListOf)):
-                sub = sub.value if isinstance(sub, MapOf) else sub.item
+            while hasattr(sub, "inner") or isinstance(sub, (MapOf, ListOf)):  # `inner`: wrappers such as
+                if hasattr(sub, "inner"):                                     # scenario.Random
+                    sub = sub.inner
+                else:
+                    sub = sub.value if isinstance(sub, MapOf) else sub.item
             if isinstance(sub, Record) and sub is not rec:
                 walk(sub, ind + 1)
         if rec.variants and keys is None:
