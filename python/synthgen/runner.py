@@ -307,7 +307,7 @@ class FrameRenderer:
 
         # Layouts: retry until every placed object meets the visibility criteria.
         pl = sc.spec["placement"]
-        need_amodal = pl["min_visible_fraction"] > 0.0
+        need_amodal = pl["min_visible_fraction"] > 0.0 or pl["max_visible_fraction"] < 1.0
         best = None
         attempts = 0
         for attempt in range(pl["max_retries"] + 1):
@@ -333,6 +333,8 @@ class FrameRenderer:
                     frac = counts[k + 1] / inside if inside else 0.0
                     if frac < pl["min_visible_fraction"]:
                         fails.append((k, f"visible fraction {frac:.3f} < {pl['min_visible_fraction']}"))
+                    elif frac > pl["max_visible_fraction"]:
+                        fails.append((k, f"visible fraction {frac:.3f} > {pl['max_visible_fraction']}"))
                 self._show([s is not None for s in spots])
             if best is None or len(fails) < len(best[1]):
                 best = (spots, fails, [o.get("_world") for o in objects])

@@ -264,6 +264,8 @@ PLACEMENT = Record(
      "non_overlapping": Bool(True, doc="footprint circles may not overlap"),
      "margin": Number(0.05, min=0.0, doc="extra clearance between footprints, metres"),
      "min_visible_fraction": Number(0.0, min=0.0, max=1.0, doc="visible / amodal pixels of every object"),
+     "max_visible_fraction": Number(1.0, min=0.0, max=1.0,
+                                    doc="at most this visible (e.g. < 1 to ask for occluded or truncated objects)"),
      "min_pixels": Integer(1, min=0, doc="visible pixels of every object"),
      "max_retries": Integer(20, min=0, max=10000, doc="layouts tried before objects are dropped")},
     default=EMPTY, doc="placement on the ground plane (y = 0)")
@@ -370,6 +372,9 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
                     ctx.error(li.loc, "an envmap light needs exactly one of 'file' or 'asset'")
                 if li.get("asset") is not None:
                     _check_assets(li["asset"], li.locs["asset"], ctx, "hdr")
+    pl = spec["placement"]
+    if pl["max_visible_fraction"] < pl["min_visible_fraction"]:
+        ctx.error(pl.locs.get("max_visible_fraction", pl.loc), "max_visible_fraction must be >= min_visible_fraction")
     x0, z0, x1, z1 = spec["placement"]["region"]
     if not (x0 < x1 and z0 < z1):
         ctx.error(spec["placement"].locs.get("region", spec.loc), "region must satisfy x_min < x_max and z_min < z_max")

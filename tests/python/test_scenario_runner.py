@@ -197,3 +197,66 @@ def test_verify_dataset_accepts_a_run_and_catches_a_wrong_label(reference, tmp_p
     open(path, "w").write("\n".join([" ".join(f)] + lines[1:]) + "\n")
     with pytest.raises(ValueError, match="YOLO line 1"):
         runner.verify_dataset(bad)
+
+
+def test_write_frame_is_a_pure_writer(tmp_path):
+    """arrays + metadata -> files, no rendering: every file reflects exactly its input."""
+    h, w = 12, 16
+    ids = np.zeros((h, w), np.uint32)
+    ids[2:5, 3:9] = 1          # object 1, class 1
+    ids[6:12, 10:16] = 2       # object 2, class 2, touching the image border
+    cls = np.where(ids == 1, 1, np.where(ids == 2, 2, 0)).astype(np.uint32)
+    depth = np.full((h, w), np.inf, np.float32)
+    depth[ids > 0] = 2.5
+    rgb = np.random.default_rng(0).random((h, w, 3)).astype(np.float32)
+    objs = []
+    for k, c in ((1, "car"), (2, "sign")):
+        m = ids == k
+        objs.append({"index": k - 1, "instance_id": k, "class": c, "class_id": k, "kind": k - 1,
+                     "visible_pixels": int(m.sum()), "amodal_pixels": int(m.sum()) + 4, "occlusion": 0.1,
+                     "visible_fraction": 0.9, "truncation": 0.0 if k == 1 else 0.5, "bbox": A.mask_bbox(m),
+                     "dimensions_hwl": [1, 2, 3], "location_camera": [0, 1, 10], "rotation_y": 0.0, "alpha": 0.0})
+    objs.append({"index": 2, "instance_id": 3, "class": "car", "class_id": 1, "kind": 0, "dropped": "no spot"})
+    meta = {"frame": 7, "image_size": [w, h], "objects": objs}
+    files = runner.write_frame(str(tmp_path), 7, {"rgb": rgb, "depth": depth, "instance_id": ids, "class_id": cls},
+                               meta, ["rgb", "rgb_exr", "depth", "depth16", "instance", "semantic", "coco", "yolo",
+                                      "kitti"])
+    assert sorted(files) == ["depth", "depth16", "instance", "kitti", "meta", "rgb", "rgb_exr", "semantic", "yolo"]
+    np.testing.assert_array_equal(read_ids(files["instance"]), ids)
+    np.testing.assert_array_equal(read_ids(files["semantic"]), cls)
+    d16 = read_ids(files["depth16"])
+    assert set(np.unique(d16[ids > 0])) == {2500} and np.all(d16[ids == 0] == 0)
+    exr = np.asarray(oiio.ImageBuf(files["rgb_exr"]).get_pixels(oiio.FLOAT))
+    np.testing.assert_array_equal(exr, rgb)
+    yolo = A.parse_yolo(open(files["yolo"]).read(), w, h)
+    assert [c for c, _ in yolo] == [0, 1] and yolo[1][1] == pytest.approx([10, 6, 6, 6])
+    kitti = A.parse_kitti(open(files["kitti"]).read())
+    assert [k["type"] for k in kitti] == ["car", "sign"] and kitti[1]["truncated"] == 0.5
+    with open(files["meta"]) as f:
+        written = json.load(f)
+    anns = written["coco"]["annotations"]
+    assert [a["instance_id"] for a in anns] == [1, 2], "the dropped object is not labelled"
+    np.testing.assert_array_equal(A.rle_decode(anns[1]["segmentation"]), ids == 2)
+    assert written["coco"]["image"] == {"id": 7, "file_name": "images/000007.png", "width": w, "height": h}
+
+
+def test_ctrl_c_stops_cleanly_and_keeps_completed_frames(tmp_path):
+    slow = str(tmp_path / "slow.yaml")
+    with open(TINY) as f, open(slow, "w") as g:
+        g.write(f.read().replace("render: {spp: 4,", "render: {spp: 128,").replace("count: 6", "count: 40"))
+    out = str(tmp_path / "ds")
+    env = dict(os.environ, PYTHONPATH=os.path.join(REPO, "python"))
+    p = subprocess.Popen([sys.executable, "-m", "synthgen", "run", slow, "-o", out, "--no-progress"], env=env,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    while time.time() < deadline and len(runner.completed_frames(out) if os.path.isdir(out) else []) < 2:
+        time.sleep(0.1)
+    p.send_signal(signal.SIGINT)
+    stdout, stderr = p.communicate(timeout=60)
+    assert p.returncode == 130, stdout + stderr
+    assert "interrupted" in stdout + stderr
+    done = runner.completed_frames(out)
+    assert 2 <= len(done) < 40
+    assert not glob.glob(os.path.join(out, "**", ".*tmp*"), recursive=True)
+    with open(os.path.join(out, "annotations", "coco.json")) as f:
+        assert len(json.load(f)["images"]) == len(done), "coco.json covers the completed frames"
