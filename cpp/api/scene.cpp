@@ -354,6 +354,15 @@ void Scene::build_render_scene() {
     r.override_material = e->material_id >= 0;
     r.material = r.override_material ? m_materials[size_t(e->material_id)]->object.get() : m_default_material.get();
     r.triangle_materials = me.triangle_materials.empty() ? nullptr : &me.triangle_materials;
+    r.object_lo = me.bounds.lo;
+    r.object_hi = me.bounds.hi;
+    {
+      const auto& M = e->world_from_object.m;
+      double det = double(M[0]) * (double(M[5]) * M[10] - double(M[6]) * M[9]) -
+                   double(M[1]) * (double(M[4]) * M[10] - double(M[6]) * M[8]) +
+                   double(M[2]) * (double(M[4]) * M[9] - double(M[5]) * M[8]);
+      r.object_per_world = std::fabs(det) > 0.0 ? float(1.0 / std::cbrt(std::fabs(det))) : 1.f;
+    }
     {
       const auto& M = e->world_from_object.m;
       float row_norm = 0.f, t_max = 0.f;

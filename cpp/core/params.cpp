@@ -78,6 +78,24 @@ std::string ParamSet::get_string(const std::string& name, const std::string& def
   type_error(name, "a string");
 }
 
+std::vector<float> ParamSet::get_floats(const std::string& name) const {
+  const Value* v = lookup(name);
+  if (!v) throw Error("parameter '" + name + "' is missing");
+  std::vector<float> out;
+  if (auto p = std::get_if<std::vector<double>>(v)) {
+    for (double d : *p) out.push_back(float(d));
+  } else if (auto d = std::get_if<double>(v)) {
+    out.push_back(float(*d));
+  } else if (auto n = std::get_if<int64_t>(v)) {
+    out.push_back(float(*n));
+  } else {
+    type_error(name, "a list of numbers");
+  }
+  for (float f : out)
+    if (!std::isfinite(f)) throw Error("parameter '" + name + "': value is not finite");
+  return out;
+}
+
 Vec3f ParamSet::get_vec3(const std::string& name, const Vec3f& def) const {
   const Value* v = lookup(name);
   if (!v) return def;

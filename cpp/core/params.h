@@ -38,6 +38,8 @@ class ParamSet {
   Vec3f get_vec3(const std::string& name, const Vec3f& def) const;
   /// Accepts a scalar (both components) or a list of two numbers.
   Vec2f get_vec2(const std::string& name, const Vec2f& def) const;
+  /// A list of numbers (a single number is a list of one); throws when absent.
+  std::vector<float> get_floats(const std::string& name) const;
   /// Returns true and sets `out` when the parameter is a texture reference.
   bool get_texture(const std::string& name, TextureRef* out) const;
 

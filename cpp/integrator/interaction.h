@@ -71,6 +71,10 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   bool has_dpdu = false;
   si.inst = hit.inst;
   si.prim = hit.prim;
+  si.p_object = po;
+  si.object_lo = inst.object_lo;
+  si.object_hi = inst.object_hi;
+  si.object_per_world = inst.object_per_world;
   if (!need_tangent) {
     si.uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
     si.dpdu = Vec3f(0.f);

@@ -105,7 +105,10 @@ class PathTracer {
     SurfaceInteraction si = make_interaction(inst, hit, (needs & k_needs_tangent) != 0);
     if (m_s.texture_filtering) {
       st.cone_width += st.cone_spread * hit.t;  // ray_cone.h, eq. (29)
-      if (needs & k_needs_footprint) set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
+      if (needs & k_needs_footprint) {
+        set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
+        si.world_footprint = surface_footprint(st.cone_width, st.ray.d, si.ng);
+      }
     }
     Vec3f wo = -st.ray.d;
     bool shadow_requested = false;
@@ -278,8 +281,10 @@ class PathTracer {
     SurfaceInteraction si = make_interaction(inst, hit, (mat->needs() & k_needs_tangent) != 0);
     // The albedo label is filtered over the whole pixel's cone (no sub-pixel scaling):
     // the pixel-centre ray stands for the pixel.
-    if (m_s.texture_filtering)
+    if (m_s.texture_filtering) {
       set_ray_cone_footprint(&si, inst, hit.prim, ray.d, m_pixel_spread * hit.t);
+      si.world_footprint = surface_footprint(m_pixel_spread * hit.t, ray.d, si.ng);
+    }
     size_t i = size_t(y) * film->width + x;
     film->depth[i] = hit.t * z_per_t;
     film->distance[i] = hit.t;

@@ -151,4 +151,16 @@ inline float camera_sample_spread_scale(uint32_t spp) {
   return std::max(0.125f, 1.f / std::sqrt(float(std::max<uint32_t>(spp, 1))));
 }
 
+/// Isotropic filter width on the surface for a ray cone of width `cone_width`, for 3D
+/// procedural textures (which have no anisotropic lookup).
+/// NOTE: a cone hitting a plane at angle theta to the normal leaves an ellipse with axes
+/// width and width / |cos theta| (Akenine-Moeller et al. 2021, "Improved Shader and Texture
+/// Level of Detail Using Ray Cones", sec. 3). The major axis removes detail still resolved
+/// along the minor one (over-blurring grazing surfaces), the minor axis lets the major
+/// direction alias; their geometric mean width / sqrt|cos theta| (the radius of the circle
+/// of equal area, as isotropic mip-mapping uses) balances the two. |cos| is clamped at 1e-4.
+inline float surface_footprint(float cone_width, const Vec3f& dir, const Vec3f& ng) {
+  return cone_width / std::sqrt(std::max(std::fabs(dot(dir, ng)), 1e-4f));
+}
+
 }  // namespace sg

@@ -28,6 +28,10 @@ struct InstanceRecord {
   /// Hit-point error bound = error_scale * max|object vertex coordinate| + error_offset
   /// (see make_interaction); precomputed from world_from_object at commit.
   float error_scale = 0.f, error_offset = 0.f;
+  /// Object-space bounds of the mesh and the instance's object-per-world length scale
+  /// (1 / cbrt|det M|), for procedural textures (relative-local mapping, footprints).
+  Vec3f object_lo, object_hi;
+  float object_per_world = 1.f;
 };
 
 struct RenderScene {

@@ -37,6 +37,12 @@ struct SurfaceInteraction {
   /// integrator/ray_cone.h.
   Vec2f uv_axis_a, uv_axis_b;
   uint32_t inst = 0, prim = 0;
+  /// For procedural textures (TexturePoint): the hit in object space, the mesh's object
+  /// bounds, the footprint width in world units and the instance's object-per-world scale.
+  Vec3f p_object;
+  Vec3f object_lo, object_hi;
+  float world_footprint = 0.f;
+  float object_per_world = 1.f;
 
   /// Local shading frame: s = dpdu, t = ns x dpdu, n = ns.
   Frame shading_frame() const {
@@ -55,6 +61,20 @@ struct SurfaceInteraction {
 /// integrator provided the footprint ellipse, else isotropically over `uv_footprint`.
 /// Materials should look textures up through this rather than Texture::eval.
 inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
+  if (t.needs_position()) {
+    TexturePoint q;
+    q.uv = si.uv;
+    q.uv_footprint = si.uv_footprint;
+    q.uv_axis_a = si.uv_axis_a;
+    q.uv_axis_b = si.uv_axis_b;
+    q.p_world = si.p;
+    q.p_object = si.p_object;
+    q.object_lo = si.object_lo;
+    q.object_hi = si.object_hi;
+    q.world_footprint = si.world_footprint;
+    q.object_per_world = si.object_per_world;
+    return t.eval_point(q);
+  }
   if (si.uv_axis_a.x != 0.f || si.uv_axis_a.y != 0.f) return t.eval_ellipse(si.uv, si.uv_axis_a, si.uv_axis_b);
   return t.eval(si.uv, si.uv_footprint);
 }

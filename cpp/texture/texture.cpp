@@ -10,10 +10,13 @@ std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet&
   std::shared_ptr<Texture> t;
   if (type == "constant") t = create_constant_texture(params);
   else if (type == "image") t = create_image_texture(params, images);
+  else if (type == "noise") t = create_noise_texture(params);
+  else if (type == "cellular") t = create_cellular_texture(params);
   else {
-    std::string guess = closest_match(type, {"constant", "image"});
+    std::string guess = closest_match(type, {"constant", "image", "noise", "cellular"});
     throw Error(context + ": unknown texture type '" + type + "'" +
-                (guess.empty() ? "" : " (did you mean '" + guess + "'?)") + "; known types: constant, image");
+                (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
+                "; known types: constant, image, noise, cellular");
   }
   params.check_unused(context + " (texture '" + type + "')");
   return t;

@@ -12,9 +12,31 @@
 
 namespace sg {
 
+/// Everything a texture may be evaluated from: the surface parameterization and footprint
+/// (all textures) and, for procedural textures with 3D mappings (object, world,
+/// relative-local), the hit point in world and object space, the object's bounds and the
+/// footprint width in world units.
+struct TexturePoint {
+  Vec2f uv;
+  float uv_footprint = 0.f;
+  Vec2f uv_axis_a, uv_axis_b;  ///< footprint ellipse in uv (zero when unknown)
+  Vec3f p_world, p_object;
+  Vec3f object_lo, object_hi;  ///< object-space bounds of the mesh (relative-local mapping)
+  float world_footprint = 0.f; ///< footprint width at the hit in world units (0 = point sample)
+  float object_per_world = 1.f; ///< object-space length per world-space length (instance scale)
+};
+
 class Texture {
  public:
   virtual ~Texture() = default;
+  /// True when the texture reads more than uv (positions: procedural 3D mappings); it is
+  /// then evaluated through eval_point.
+  virtual bool needs_position() const { return false; }
+  /// Value at a full TexturePoint. Default: the uv lookup (eval_ellipse when the ellipse is known).
+  virtual Color eval_point(const TexturePoint& q) const {
+    if (q.uv_axis_a.x != 0.f || q.uv_axis_a.y != 0.f) return eval_ellipse(q.uv, q.uv_axis_a, q.uv_axis_b);
+    return eval(q.uv, q.uv_footprint);
+  }
   /// Linear RGB value at texture coordinate `uv`, filtered over a footprint of width
   /// `footprint` in texture space (0 = point sample).
   virtual Color eval(const Vec2f& uv, float footprint = 0.f) const = 0;

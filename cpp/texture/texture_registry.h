@@ -9,4 +9,6 @@ namespace sg {
 std::shared_ptr<Texture> create_constant_texture(const ParamSet& params);
 class ImageCache;
 std::shared_ptr<Texture> create_image_texture(const ParamSet& params, ImageCache* images);
+std::shared_ptr<Texture> create_noise_texture(const ParamSet& params);
+std::shared_ptr<Texture> create_cellular_texture(const ParamSet& params);
 }  // namespace sg

@@ -1,0 +1,87 @@
+// Procedural noise: Perlin gradient noise (2D/3D), value noise, fractal sums (fBm,
+// turbulence) with footprint band-limiting, cellular (Worley) noise; colour ramps.
+// Deterministic: every function is a pure function of its inputs and a seed.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/math.h"
+
+namespace sg {
+
+/// Lattice noise with a seeded permutation (one table per seed).
+class NoiseBasis {
+ public:
+  explicit NoiseBasis(uint64_t seed = 0);
+  /// Improved Perlin gradient noise in [-1, 1] (Perlin 2002, "Improving Noise"), 3D.
+  float perlin(const Vec3f& p) const;
+  /// 2D Perlin noise in [-1, 1] (gradients on the unit circle).
+  float perlin2(float x, float y) const;
+  /// Value noise in [-1, 1]: random lattice values, quintic interpolation.
+  float value(const Vec3f& p) const;
+  /// A hash of a lattice cell (for cellular noise and per-cell randomness), in [0, 2^32).
+  uint32_t hash(int x, int y, int z) const;
+
+ private:
+  std::array<uint8_t, 512> m_perm;
+};
+
+enum class NoiseKind { Perlin, Value };
+
+/// Parameters of a fractal sum, the seed's equations (4-5)-(4-7):
+/// f_s(x) = sum_i w_i f_noise(s_i x), s_i = lacunarity * s_{i-1}, w_i = w_{i-1} * lacunarity^-H,
+/// s_0 = w_0 = 1.
+struct FractalParams {
+  int octaves = 5;
+  float lacunarity = 2.f;
+  float H = 1.f;  ///< spectral exponent: w_i = lacunarity^(-H i)
+  /// Divide by sum_i w_i, so fBm stays in [-1, 1] and turbulence in [0, 1].
+  bool normalize = true;
+};
+
+/// Fractal Brownian motion sum_i w_i noise(s_i p).
+/// `footprint` is the width of the filter footprint in the units of p (0 = none): octaves
+/// above the Nyquist rate of the footprint (period < 2 footprints) are faded out, gone at a
+/// period of one footprint (replaced by their mean, 0), so the sum does not alias.
+float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint = 0.f);
+/// Turbulence sum_i w_i |noise(s_i p)|, band-limited like fbm (faded octaves are replaced
+/// by the mean of |noise|).
+float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint = 0.f);
+/// Fade weight of an octave of frequency `freq` for a footprint (1 = kept, 0 = removed).
+float octave_fade(float freq, float footprint);
+/// Mean of |noise| over space (used for faded turbulence octaves).
+float mean_abs_noise(NoiseKind kind);
+
+/// Cellular (Worley 1996) noise: one jittered feature point per unit cell.
+struct CellularResult {
+  float f1 = 0.f, f2 = 0.f;  ///< distances to the nearest and second-nearest feature points
+  float edge = 0.f;          ///< distance to the nearest Voronoi cell boundary
+  uint32_t cell_hash = 0;    ///< hash of the nearest feature point's cell (per-cell randomness)
+};
+/// `jitter` in [0, 1] scales the feature points' random offsets (0 = a regular grid).
+CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter = 1.f);
+
+/// Piecewise-linear colour map over [0, 1] ("colour maps" of the seed): stops sorted by
+/// position, constant beyond the first and last stop.
+class ColorRamp {
+ public:
+  ColorRamp() = default;
+  ColorRamp(std::vector<float> positions, std::vector<Color> colors);
+  Color eval(float t) const;
+  bool empty() const { return m_pos.empty(); }
+
+ private:
+  std::vector<float> m_pos;
+  std::vector<Color> m_col;
+};
+
+/// Hermite smoothstep of x between e0 and e1 (e0 > e1 reverses it).
+inline float smoothstep(float e0, float e1, float x) {
+  float t = (x - e0) / (e1 - e0);
+  t = t < 0.f ? 0.f : (t > 1.f ? 1.f : t);
+  return t * t * (3.f - 2.f * t);
+}
+
+}  // namespace sg

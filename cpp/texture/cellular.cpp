@@ -1,0 +1,113 @@
+// Texture "cellular": Worley (cellular) noise through a texture-coordinate mapping and a
+// colour ramp: F1, F2, F2 - F1 (crack-like ridges), the exact distance to the nearest cell
+// edge, or a random value per cell (cobbles, flakes, scratched patches).
+//
+// Parameters (defaults): output "f1" | "f2" | "f2_minus_f1" | "edge" | "cell" ("f1");
+// jitter 1 (0 = regular grid); seed 0; mapping, scale, offset as "noise" (mapping "object");
+// remap [lo, hi] -> [0, 1] (default [0, 1]), smooth, invert, ramp_positions / ramp_colors;
+// band_limit true: where the footprint covers a cell or more, the value fades to its mean.
+#include "texture/procedural.h"
+#include "texture/texture_registry.h"
+
+namespace sg {
+
+namespace {
+
+class CellularTexture final : public Texture {
+ public:
+  enum class Output { F1, F2, F2MinusF1, Edge, Cell };
+
+  CellularTexture(Output output, float jitter, uint64_t seed, ProceduralMapping mapping, ProceduralShaping shaping,
+                  bool band_limit)
+      : m_output(output), m_jitter(jitter), m_basis(seed), m_mapping(mapping), m_shaping(std::move(shaping)),
+        m_band_limit(band_limit) {
+    m_mean = 0.f;
+    for (int i = 0; i < 512; ++i) {
+      auto radical = [](int i, int b) {
+        float f = 1.f, r = 0.f;
+        for (; i > 0; i /= b) {
+          f /= float(b);
+          r += f * float(i % b);
+        }
+        return r;
+      };
+      m_mean += raw(Vec3f(radical(i + 1, 2), radical(i + 1, 3), radical(i + 1, 5)) * 16.f);
+    }
+    m_mean /= 512.f;
+    m_average = estimate_average([&](const Vec3f& p) { return m_shaping.color(raw(p)); });
+  }
+
+  float raw(const Vec3f& p) const {
+    CellularResult r = cellular(m_basis, p, m_jitter);
+    switch (m_output) {
+      case Output::F2: return r.f2;
+      case Output::F2MinusF1: return r.f2 - r.f1;
+      case Output::Edge: return r.edge;
+      case Output::Cell: return float(r.cell_hash >> 8) * 0x1p-24f;
+      case Output::F1:
+      default: return r.f1;
+    }
+  }
+
+  bool needs_position() const override { return m_mapping.needs_position(); }
+  Color eval_point(const TexturePoint& q) const override {
+    float w;
+    Vec3f p = m_mapping.point(q, &w);
+    if (!m_band_limit || w < 1e-3f) return m_shaping.color(raw(p));
+    // NOTE: cellular patterns have detail finer than the cells (edges, F2 - F1 ridges) and no
+    // octave structure to clamp, so the footprint is box-filtered by supersampling: the
+    // shaped value averaged over 9 points (the centre and a cube of half-width w / 4,
+    // i.e. a box of width w sampled at its centre and the centres of its eight octants);
+    // beyond one cell per footprint the result fades to the shaped mean (the average).
+    float a = 1.f - smoothstep(0.5f, 1.f, w);
+    if (a <= 0.f) return m_average;
+    Color sum = m_shaping.color(raw(p));
+    const float h = 0.25f * w;
+    for (int k = 0; k < 8; ++k)
+      sum += m_shaping.color(raw(p + Vec3f((k & 1) ? h : -h, (k & 2) ? h : -h, (k & 4) ? h : -h)));
+    return sum * (a / 9.f) + m_average * (1.f - a);
+  }
+  Color eval(const Vec2f& uv, float footprint) const override {
+    TexturePoint q;
+    q.uv = uv;
+    q.uv_footprint = footprint;
+    return eval_point(q);
+  }
+  Color average() const override { return m_average; }
+
+ private:
+  Output m_output;
+  float m_jitter;
+  NoiseBasis m_basis;
+  ProceduralMapping m_mapping;
+  ProceduralShaping m_shaping;
+  bool m_band_limit;
+  float m_mean;
+  Color m_average;
+};
+
+}  // namespace
+
+std::shared_ptr<Texture> create_cellular_texture(const ParamSet& params) {
+  std::string o = params.get_string("output", "f1");
+  CellularTexture::Output out;
+  if (o == "f1") out = CellularTexture::Output::F1;
+  else if (o == "f2") out = CellularTexture::Output::F2;
+  else if (o == "f2_minus_f1") out = CellularTexture::Output::F2MinusF1;
+  else if (o == "edge") out = CellularTexture::Output::Edge;
+  else if (o == "cell") out = CellularTexture::Output::Cell;
+  else {
+    std::string g = closest_match(o, {"f1", "f2", "f2_minus_f1", "edge", "cell"});
+    throw Error("parameter 'output': unknown output '" + o + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
+                "; allowed: f1, f2, f2_minus_f1, edge, cell");
+  }
+  float jitter = params.get_float("jitter", 1.f);
+  if (!(jitter >= 0.f && jitter <= 1.f)) throw Error("parameter 'jitter': must lie in [0, 1]");
+  int64_t seed = params.get_int("seed", 0);
+  ProceduralMapping mapping = ProceduralMapping::from_params(params);
+  ProceduralShaping shaping = ProceduralShaping::from_params(params, Vec2f(0.f, 1.f));
+  bool band_limit = params.get_bool("band_limit", true);
+  return std::make_shared<CellularTexture>(out, jitter, uint64_t(seed), mapping, std::move(shaping), band_limit);
+}
+
+}  // namespace sg

@@ -1,0 +1,142 @@
+// Internal: what the procedural texture plugins ("noise", "cellular") share:
+// texture-coordinate mappings (the seed's mapping U) and output shaping (remap, colour ramp).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/noise.h"
+#include "core/params.h"
+#include "texture/texture.h"
+
+namespace sg {
+
+/// Texture coordinates of a procedural texture, and the footprint in those units.
+///   uv:       (u, v, 0) * scale + offset
+///   object:   object-space position * scale + offset (moves and scales with the object)
+///   world:    world-space position * scale + offset
+///   relative: relative-local, the object-space position divided by the mesh's bounding-box
+///             extent: (p - lo) / (hi - lo) in [0, 1]^3 (the seed's equation (4-9)), so an
+///             effect can be confined to e.g. the lower part of any model; * scale + offset.
+struct ProceduralMapping {
+  enum class Kind { UV, Object, World, Relative } kind = Kind::Object;
+  Vec3f scale{1.f}, offset{0.f};
+
+  static ProceduralMapping from_params(const ParamSet& p, const std::string& default_kind = "object") {
+    ProceduralMapping m;
+    std::string k = p.get_string("mapping", default_kind);
+    if (k == "uv") m.kind = Kind::UV;
+    else if (k == "object") m.kind = Kind::Object;
+    else if (k == "world") m.kind = Kind::World;
+    else if (k == "relative") m.kind = Kind::Relative;
+    else {
+      std::string g = closest_match(k, {"uv", "object", "world", "relative"});
+      throw Error("parameter 'mapping': unknown mapping '" + k + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
+                  "; allowed: uv, object, world, relative");
+    }
+    m.scale = p.get_vec3("scale", Vec3f(1.f));
+    m.offset = p.get_vec3("offset", Vec3f(0.f));
+    if (!(m.scale.x > 0.f && m.scale.y > 0.f && m.scale.z > 0.f)) throw Error("parameter 'scale': must be positive");
+    return m;
+  }
+
+  bool needs_position() const { return kind != Kind::UV; }
+
+  /// Mapped point; `footprint` receives the filter width in mapped units (0 = point sample).
+  Vec3f point(const TexturePoint& q, float* footprint) const {
+    float smax = std::max(scale.x, std::max(scale.y, scale.z));
+    switch (kind) {
+      case Kind::UV: {
+        float fa = std::sqrt(std::max(q.uv_axis_a.x * q.uv_axis_a.x + q.uv_axis_a.y * q.uv_axis_a.y,
+                                      q.uv_axis_b.x * q.uv_axis_b.x + q.uv_axis_b.y * q.uv_axis_b.y));
+        *footprint = std::max(q.uv_footprint, fa) * smax;
+        return Vec3f(q.uv.x, q.uv.y, 0.f) * scale + offset;
+      }
+      case Kind::Object:
+        *footprint = q.world_footprint * q.object_per_world * smax;
+        return q.p_object * scale + offset;
+      case Kind::World:
+        *footprint = q.world_footprint * smax;
+        return q.p_world * scale + offset;
+      case Kind::Relative:
+      default: {
+        Vec3f ext = q.object_hi - q.object_lo;
+        auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
+        Vec3f r((q.p_object.x - q.object_lo.x) / safe(ext.x), (q.p_object.y - q.object_lo.y) / safe(ext.y),
+                (q.p_object.z - q.object_lo.z) / safe(ext.z));
+        float emin = std::max(1e-12f, std::min(safe(ext.x), std::min(safe(ext.y), safe(ext.z))));
+        *footprint = q.world_footprint * q.object_per_world / emin * smax;
+        return r * scale + offset;
+      }
+    }
+  }
+};
+
+/// Scalar -> colour: v -> clamp((v - lo) / (hi - lo)) (smoothstep with `smooth`), then a
+/// colour ramp (grey without one), times `strength`.
+struct ProceduralShaping {
+  float lo = 0.f, hi = 1.f;
+  bool smooth = false;
+  bool invert = false;
+  ColorRamp ramp;
+
+  static ProceduralShaping from_params(const ParamSet& p, Vec2f default_range) {
+    ProceduralShaping s;
+    Vec2f r = p.get_vec2("remap", default_range);
+    s.lo = r.x;
+    s.hi = r.y;
+    if (!(s.hi != s.lo)) throw Error("parameter 'remap': the two ends must differ");
+    s.smooth = p.get_bool("smooth", false);
+    s.invert = p.get_bool("invert", false);
+    bool has_pos = p.has("ramp_positions"), has_col = p.has("ramp_colors");
+    if (has_pos != has_col) throw Error("parameters 'ramp_positions' and 'ramp_colors' go together");
+    if (has_pos) {
+      std::vector<float> pos = p.get_floats("ramp_positions");
+      std::vector<float> flat = p.get_floats("ramp_colors");
+      if (flat.size() != 3 * pos.size())
+        throw Error("parameter 'ramp_colors': needs 3 numbers (r, g, b) per ramp position (" +
+                    std::to_string(pos.size()) + " positions, " + std::to_string(flat.size()) + " numbers)");
+      std::vector<Color> cols;
+      for (size_t i = 0; i < pos.size(); ++i) cols.emplace_back(flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]);
+      s.ramp = ColorRamp(pos, cols);
+    }
+    return s;
+  }
+
+  float shape(float v) const {
+    float t = (v - lo) / (hi - lo);
+    t = t < 0.f ? 0.f : (t > 1.f ? 1.f : t);
+    if (smooth) t = t * t * (3.f - 2.f * t);
+    return invert ? 1.f - t : t;
+  }
+  Color color(float v) const {
+    float t = shape(v);
+    return ramp.empty() ? Color(t) : ramp.eval(t);
+  }
+};
+
+/// Mean colour of a procedural texture, estimated once at creation from a fixed set of
+/// points (for light power estimates and albedo priors; never used for shading).
+template <class F>
+Color estimate_average(const F& value_at) {
+  Color sum(0.f);
+  const int n = 512;
+  for (int i = 0; i < n; ++i) {
+    // A 3D Halton-like lattice over a 16-unit cube (bases 2, 3, 5).
+    auto radical = [](int i, int b) {
+      float f = 1.f, r = 0.f;
+      for (; i > 0; i /= b) {
+        f /= float(b);
+        r += f * float(i % b);
+      }
+      return r;
+    };
+    sum += value_at(Vec3f(radical(i + 1, 2), radical(i + 1, 3), radical(i + 1, 5)) * 16.f);
+  }
+  return sum / float(n);
+}
+
+}  // namespace sg
