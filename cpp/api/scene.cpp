@@ -76,7 +76,10 @@ const TriangleMesh& Scene::mesh(uint32_t id) const { return *get_slot(m_meshes, 
 
 uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
   uint32_t id = uint32_t(m_textures.size());
-  auto t = create_texture(type, params, "texture " + std::to_string(id), &m_images);
+  auto inputs = [this](uint32_t tid) -> std::shared_ptr<Texture> {
+    return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
+  };
+  auto t = create_texture(type, params, "texture " + std::to_string(id), &m_images, inputs);
   m_textures.emplace_back(TextureEntry{type, params, t});
   return id;
 }

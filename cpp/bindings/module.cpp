@@ -285,6 +285,43 @@ a BVH build). render() commits pending edits first.)doc")
              return s.add_texture(type, params_from_dict(params, "texture '" + type + "'"));
            },
            py::arg("type"), py::arg("params") = py::dict())
+      .def("texture_values",
+           [](const Scene& s, uint32_t id, py::array_t<float, py::array::c_style | py::array::forcecast> points,
+              std::array<float, 3> lo, std::array<float, 3> hi, float world_footprint, py::object uvs) {
+             if (id >= s.textures().size() || !s.textures()[id]) throw Error("texture " + std::to_string(id) + " does not exist");
+             const Texture& t = *s.textures()[id]->object;
+             if (points.ndim() != 2 || points.shape(1) != 3) throw Error("texture_values: points must be N x 3");
+             const size_t n = size_t(points.shape(0));
+             py::array_t<float, py::array::c_style | py::array::forcecast> uv_arr;
+             const bool has_uv = !uvs.is_none();
+             if (has_uv) {
+               uv_arr = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(uvs);
+               if (!uv_arr || uv_arr.ndim() != 2 || uv_arr.shape(1) != 2 || size_t(uv_arr.shape(0)) != n)
+                 throw Error("texture_values: uvs must be N x 2 like points");
+             }
+             py::array_t<float> out(std::vector<py::ssize_t>{py::ssize_t(n), py::ssize_t(3)});
+             auto P = points.unchecked<2>();
+             auto O = out.mutable_unchecked<2>();
+             for (size_t i = 0; i < n; ++i) {
+               TexturePoint q;
+               q.p_world = q.p_object = Vec3f(P(i, 0), P(i, 1), P(i, 2));
+               q.object_lo = Vec3f(lo[0], lo[1], lo[2]);
+               q.object_hi = Vec3f(hi[0], hi[1], hi[2]);
+               q.world_footprint = world_footprint;
+               if (has_uv) q.uv = Vec2f(uv_arr.at(i, 0), uv_arr.at(i, 1));
+               Color c = t.eval_point(q);
+               O(i, 0) = c.x;
+               O(i, 1) = c.y;
+               O(i, 2) = c.z;
+             }
+             return out;
+           },
+           py::arg("texture"), py::arg("points"), py::arg("object_lo") = std::array<float, 3>{0.f, 0.f, 0.f},
+           py::arg("object_hi") = std::array<float, 3>{1.f, 1.f, 1.f}, py::arg("world_footprint") = 0.f,
+           py::arg("uvs") = py::none(),
+           "Values of texture `texture` at N points (N x 3, used as world and object positions; uvs N x 2\n"
+           "optional), for an object with bounds [object_lo, object_hi] and a footprint width in world\n"
+           "units: for inspecting and calibrating procedural textures. Returns N x 3 float32.")
       .def("material_info",
            [](const Scene& s, uint32_t id) {
              const auto& ms = s.materials();

@@ -162,7 +162,7 @@ float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Frac
   return fractal<true>(b, kind, p, f, footprint);
 }
 
-CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter) {
+CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter, bool want_edge) {
   int X = fast_floor(p.x), Y = fast_floor(p.y), Z = fast_floor(p.z);
   auto feature = [&](int i, int j, int k, uint32_t* h) {
     uint32_t a = b.hash(i, j, k);
@@ -195,6 +195,7 @@ CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter) {
       }
   r.f1 = std::sqrt(d1);
   r.f2 = std::sqrt(d2);
+  if (!want_edge) return r;
   // Pass 2: exact distance to the nearest cell boundary: the bisector planes between the
   // nearest feature point and its neighbours (Quilez, "Voronoi edges", 2012).
   // NOTE: 5^3 cells around the point's cell cover every neighbour of the nearest cell.

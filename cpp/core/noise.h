@@ -61,7 +61,8 @@ struct CellularResult {
   uint32_t cell_hash = 0;    ///< hash of the nearest feature point's cell (per-cell randomness)
 };
 /// `jitter` in [0, 1] scales the feature points' random offsets (0 = a regular grid).
-CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter = 1.f);
+/// The exact edge distance costs a second search over 125 cells: computed only with `edge`.
+CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter = 1.f, bool edge = true);
 
 /// Piecewise-linear colour map over [0, 1] ("colour maps" of the seed): stops sorted by
 /// position, constant beyond the first and last stop.

@@ -75,6 +75,7 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   si.object_lo = inst.object_lo;
   si.object_hi = inst.object_hi;
   si.object_per_world = inst.object_per_world;
+  si.world_from_object = &inst.world_from_object;
   if (!need_tangent) {
     si.uv = m.uvs.empty() ? Vec2f(b1, b2) : m.uvs[i0] * b0 + m.uvs[i1] * b1 + m.uvs[i2] * b2;
     si.dpdu = Vec3f(0.f);

@@ -43,6 +43,8 @@ struct SurfaceInteraction {
   Vec3f object_lo, object_hi;
   float world_footprint = 0.f;
   float object_per_world = 1.f;
+  /// The instance transform (3D bump mapping of procedural heights shifts p_object with it).
+  const Transform* world_from_object = nullptr;
 
   /// Local shading frame: s = dpdu, t = ns x dpdu, n = ns.
   Frame shading_frame() const {

@@ -76,6 +76,25 @@ inline void apply_normal_map(SurfaceInteraction* si, const Texture& normal_map, 
 /// n' ~ n - (dh/du) T - (dh/dv) B for a locally orthonormal (u, v) parameterization
 /// (pbrt-v4 sec. 10.5.2 BumpMap(), with its shift du = 0.5 (|dudx| + |dudy|), else 0.0005).
 inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float scale) {
+  if (height.needs_position() && si->world_from_object) {
+    // Procedural heights over 3D mappings: a central difference along the shading
+    // tangents in world space (height and `scale` in world units: a slope of 1 per metre
+    // tilts by 45 degrees), over half the world footprint or 0.1 mm, with p_object moved
+    // by the same offset through the instance transform.
+    Frame f = si->shading_frame();
+    float d = std::max(0.5f * si->world_footprint, 1e-4f);
+    auto h = [&](const Vec3f& dir, float sgn) {
+      SurfaceInteraction q = *si;
+      Vec3f dw = dir * (sgn * d);
+      q.p = si->p + dw;
+      q.p_object = si->p_object + si->world_from_object->apply_inverse_vector(dw);
+      return eval_texture(height, q).x;
+    };
+    float dhds = (h(f.s, 1.f) - h(f.s, -1.f)) / (2.f * d);
+    float dhdt = (h(f.t, 1.f) - h(f.t, -1.f)) / (2.f * d);
+    apply_tangent_normal(si, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
+    return;
+  }
   constexpr float k_min_delta = 0.0005f;
   float d = std::max(0.5f * si->uv_footprint, k_min_delta);
   float fp = si->uv_footprint;

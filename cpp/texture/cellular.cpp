@@ -38,7 +38,7 @@ class CellularTexture final : public Texture {
   }
 
   float raw(const Vec3f& p) const {
-    CellularResult r = cellular(m_basis, p, m_jitter);
+    CellularResult r = cellular(m_basis, p, m_jitter, m_output == Output::Edge);
     switch (m_output) {
       case Output::F2: return r.f2;
       case Output::F2MinusF1: return r.f2 - r.f1;
@@ -53,7 +53,10 @@ class CellularTexture final : public Texture {
   Color eval_point(const TexturePoint& q) const override {
     float w;
     Vec3f p = m_mapping.point(q, &w);
-    if (!m_band_limit || w < 1e-3f) return m_shaping.color(raw(p));
+    // Detail of the shaped pattern: the remap interval (in cell units for distances), one
+    // cell for per-cell values. Footprints well below it need no filtering.
+    float detail = m_output == Output::Cell ? 1.f : std::fabs(m_shaping.hi - m_shaping.lo);
+    if (!m_band_limit || w < 0.25f * detail) return m_shaping.color(raw(p));
     // NOTE: cellular patterns have detail finer than the cells (edges, F2 - F1 ridges) and no
     // octave structure to clamp, so the footprint is box-filtered by supersampling: the
     // shaped value averaged over 9 points (the centre and a cube of half-width w / 4,

@@ -6,17 +6,20 @@
 namespace sg {
 
 std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet& params,
-                                        const std::string& context, ImageCache* images) {
+                                        const std::string& context, ImageCache* images,
+                                        const TextureInputs& inputs) {
   std::shared_ptr<Texture> t;
   if (type == "constant") t = create_constant_texture(params);
   else if (type == "image") t = create_image_texture(params, images);
   else if (type == "noise") t = create_noise_texture(params);
   else if (type == "cellular") t = create_cellular_texture(params);
+  else if (type == "blend") t = create_blend_texture(params, inputs);
+  else if (type == "gradient") t = create_gradient_texture(params);
   else {
-    std::string guess = closest_match(type, {"constant", "image", "noise", "cellular"});
+    std::string guess = closest_match(type, {"blend", "cellular", "constant", "gradient", "image", "noise"});
     throw Error(context + ": unknown texture type '" + type + "'" +
                 (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-                "; known types: constant, image, noise, cellular");
+                "; known types: blend, cellular, constant, gradient, image, noise");
   }
   params.check_unused(context + " (texture '" + type + "')");
   return t;

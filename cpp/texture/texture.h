@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -58,11 +59,16 @@ class Texture {
 };
 
 class ImageCache;
+/// Texture library lookup for textures built from other textures ("blend"); null when absent.
+using TextureInputs = std::function<std::shared_ptr<Texture>(uint32_t id)>;
 /// Creates a texture plugin by registry key. Image files are decoded through `images`
-/// (the scene's shared cache, texture/image_cache.h; null = a private copy).
+/// (the scene's shared cache, texture/image_cache.h; null = a private copy); `inputs`
+/// resolves texture references of composite textures (textures are immutable once added,
+/// so a reference always sees the same texture).
 /// Throws sg::Error naming `context` for unknown types or parameters.
 std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet& params,
-                                        const std::string& context, ImageCache* images = nullptr);
+                                        const std::string& context, ImageCache* images = nullptr,
+                                        const TextureInputs& inputs = nullptr);
 
 std::shared_ptr<Texture> make_constant_texture(const Color& value);
 

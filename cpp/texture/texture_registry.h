@@ -11,4 +11,6 @@ class ImageCache;
 std::shared_ptr<Texture> create_image_texture(const ParamSet& params, ImageCache* images);
 std::shared_ptr<Texture> create_noise_texture(const ParamSet& params);
 std::shared_ptr<Texture> create_cellular_texture(const ParamSet& params);
+std::shared_ptr<Texture> create_blend_texture(const ParamSet& params, const TextureInputs& inputs);
+std::shared_ptr<Texture> create_gradient_texture(const ParamSet& params);
 }  // namespace sg

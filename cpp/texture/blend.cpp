@@ -1,0 +1,109 @@
+// Texture "blend": combines two inputs (colours or textures) with a blend operation, then
+// optionally shapes the result like the procedural textures (remap, colour ramp). The
+// building block of masks such as "rust where the noise is high, more at the bottom".
+//
+// Parameters (defaults): a, b: colour or texture reference (0, 0); op "mix" | "add" |
+// "subtract" | "multiply" | "min" | "max" | "screen" | "difference" ("mix"); factor: number or
+// texture (0.5; mix: (1 - f) a + f b; other ops: a op (f b)); shaping only when `remap` or a
+// ramp is given: the first channel is remapped [lo, hi] -> [0, 1] (smooth, invert) and
+// coloured by ramp_positions / ramp_colors (grey without).
+#include "texture/procedural.h"
+#include "texture/texture_registry.h"
+
+namespace sg {
+
+namespace {
+
+enum class BlendOp { Mix, Add, Subtract, Multiply, Min, Max, Screen, Difference };
+
+class BlendTexture final : public Texture {
+ public:
+  BlendTexture(std::shared_ptr<Texture> a, std::shared_ptr<Texture> b, std::shared_ptr<Texture> f, BlendOp op,
+               bool shape, ProceduralShaping shaping)
+      : m_a(std::move(a)), m_b(std::move(b)), m_f(std::move(f)), m_op(op), m_shape(shape),
+        m_shaping(std::move(shaping)) {
+    m_position = m_a->needs_position() || m_b->needs_position() || m_f->needs_position();
+    // The average of a non-linear combination is estimated from the inputs' averages.
+    m_average = combine(m_a->average(), m_b->average(), m_f->average().x);
+  }
+
+  Color combine(const Color& a, const Color& b, float f) const {
+    Color r;
+    switch (m_op) {
+      case BlendOp::Mix: r = a * (1.f - f) + b * f; break;
+      case BlendOp::Add: r = a + b * f; break;
+      case BlendOp::Subtract: r = a - b * f; break;
+      case BlendOp::Multiply: r = a * (b * f); break;
+      case BlendOp::Min: r = vmin(a, b * f); break;
+      case BlendOp::Max: r = vmax(a, b * f); break;
+      case BlendOp::Screen: r = Color(1.f) - (Color(1.f) - a) * (Color(1.f) - b * f); break;
+      case BlendOp::Difference: default: r = vabs(a - b * f); break;
+    }
+    return m_shape ? m_shaping.color(r.x) : r;
+  }
+
+  bool needs_position() const override { return m_position; }
+  Color eval_point(const TexturePoint& q) const override {
+    return combine(m_a->eval_point(q), m_b->eval_point(q), m_f->eval_point(q).x);
+  }
+  Color eval(const Vec2f& uv, float footprint) const override {
+    TexturePoint q;
+    q.uv = uv;
+    q.uv_footprint = footprint;
+    return eval_point(q);
+  }
+  bool is_constant() const override { return m_a->is_constant() && m_b->is_constant() && m_f->is_constant(); }
+  Color average() const override { return m_average; }
+
+ private:
+  std::shared_ptr<Texture> m_a, m_b, m_f;
+  BlendOp m_op;
+  bool m_shape;
+  ProceduralShaping m_shaping;
+  bool m_position = false;
+  Color m_average;
+};
+
+std::shared_ptr<Texture> input(const ParamSet& params, const std::string& name, const Color& def,
+                               const TextureInputs& inputs) {
+  TextureRef ref;
+  if (params.get_texture(name, &ref)) {
+    std::shared_ptr<Texture> t = inputs ? inputs(ref.id) : nullptr;
+    if (!t) throw Error("parameter '" + name + "': texture " + std::to_string(ref.id) + " does not exist");
+    return t;
+  }
+  return make_constant_texture(params.get_color(name, def));
+}
+
+}  // namespace
+
+std::shared_ptr<Texture> create_blend_texture(const ParamSet& params, const TextureInputs& inputs) {
+  auto a = input(params, "a", Color(0.f), inputs);
+  auto b = input(params, "b", Color(0.f), inputs);
+  auto f = input(params, "factor", Color(0.5f), inputs);
+  const std::vector<std::pair<std::string, BlendOp>> ops = {
+      {"mix", BlendOp::Mix}, {"add", BlendOp::Add}, {"subtract", BlendOp::Subtract}, {"multiply", BlendOp::Multiply},
+      {"min", BlendOp::Min}, {"max", BlendOp::Max}, {"screen", BlendOp::Screen}, {"difference", BlendOp::Difference}};
+  std::string name = params.get_string("op", "mix");
+  BlendOp op = BlendOp::Mix;
+  bool found = false;
+  std::vector<std::string> names;
+  for (const auto& o : ops) {
+    names.push_back(o.first);
+    if (o.first == name) {
+      op = o.second;
+      found = true;
+    }
+  }
+  if (!found) {
+    std::string g = closest_match(name, names);
+    throw Error("parameter 'op': unknown operation '" + name + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
+                "; allowed: mix, add, subtract, multiply, min, max, screen, difference");
+  }
+  bool shape = params.has("remap") || params.has("ramp_positions") || params.has("ramp_colors");
+  ProceduralShaping shaping;
+  if (shape) shaping = ProceduralShaping::from_params(params, Vec2f(0.f, 1.f));
+  return std::make_shared<BlendTexture>(std::move(a), std::move(b), std::move(f), op, shape, std::move(shaping));
+}
+
+}  // namespace sg

@@ -1,0 +1,55 @@
+// Texture "gradient": one coordinate of a mapping as a value, shaped like the procedural
+// textures: e.g. relative-local height (mapping "relative", axis "y") to confine rust or dirt
+// to the lower part of any model, whatever its size and position.
+//
+// Parameters (defaults): axis "x" | "y" | "z" ("y"); mapping "relative" (or uv, object, world),
+// scale, offset; remap [lo, hi] -> [0, 1] ([0, 1]), smooth, invert; ramp_positions /
+// ramp_colors.
+#include "texture/procedural.h"
+#include "texture/texture_registry.h"
+
+namespace sg {
+
+namespace {
+
+class GradientTexture final : public Texture {
+ public:
+  GradientTexture(int axis, ProceduralMapping mapping, ProceduralShaping shaping)
+      : m_axis(axis), m_mapping(mapping), m_shaping(std::move(shaping)) {
+    // Average over the unit interval of the coordinate (the relative-local range).
+    Color s(0.f);
+    for (int i = 0; i < 256; ++i) s += m_shaping.color((float(i) + 0.5f) / 256.f);
+    m_average = s / 256.f;
+  }
+  bool needs_position() const override { return m_mapping.needs_position(); }
+  Color eval_point(const TexturePoint& q) const override {
+    float w;
+    Vec3f p = m_mapping.point(q, &w);
+    return m_shaping.color(p[m_axis]);
+  }
+  Color eval(const Vec2f& uv, float footprint) const override {
+    TexturePoint q;
+    q.uv = uv;
+    q.uv_footprint = footprint;
+    return eval_point(q);
+  }
+  Color average() const override { return m_average; }
+
+ private:
+  int m_axis;
+  ProceduralMapping m_mapping;
+  ProceduralShaping m_shaping;
+  Color m_average;
+};
+
+}  // namespace
+
+std::shared_ptr<Texture> create_gradient_texture(const ParamSet& params) {
+  std::string a = params.get_string("axis", "y");
+  if (a != "x" && a != "y" && a != "z") throw Error("parameter 'axis': must be x, y or z, got '" + a + "'");
+  ProceduralMapping mapping = ProceduralMapping::from_params(params, "relative");
+  ProceduralShaping shaping = ProceduralShaping::from_params(params, Vec2f(0.f, 1.f));
+  return std::make_shared<GradientTexture>(a == "x" ? 0 : (a == "y" ? 1 : 2), mapping, std::move(shaping));
+}
+
+}  // namespace sg
