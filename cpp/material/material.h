@@ -20,6 +20,33 @@
 namespace sg {
 
 /// Local geometry at a ray hit, everything in world space.
+/// Values of non-constant textures already evaluated at one shading point. A material calls
+/// eval/pdf/sample several times per hit and a mix re-evaluates its mask in each call; the
+/// values are exact functions of the hit, so the first evaluation is kept (per hit, on the
+/// stack: no sharing between threads). `tag` 0 is a texture value, 1 a bump gradient.
+struct TextureValueCache {
+  static constexpr int k_size = 8;
+  const void* key[k_size] = {};
+  int tag[k_size] = {};
+  Color value[k_size];
+  int next = 0;
+  const Color* find(const void* k, int t) const {
+    for (int i = 0; i < k_size; ++i)
+      if (key[i] == k && tag[i] == t) return &value[i];
+    return nullptr;
+  }
+  void put(const void* k, int t, const Color& v) {
+    key[next] = k;
+    tag[next] = t;
+    value[next] = v;
+    next = (next + 1) % k_size;
+  }
+  void clear() {
+    for (int i = 0; i < k_size; ++i) key[i] = nullptr;
+    next = 0;
+  }
+};
+
 struct SurfaceInteraction {
   Vec3f p;        ///< position
   Vec3f p_error;  ///< conservative absolute floating-point error bound of `p`
@@ -45,6 +72,9 @@ struct SurfaceInteraction {
   float object_per_world = 1.f;
   /// The instance transform (3D bump mapping of procedural heights shifts p_object with it).
   const Transform* world_from_object = nullptr;
+  /// Texture values evaluated at this point (see TextureValueCache); whoever moves the
+  /// point (p, uv) must clear it.
+  mutable TextureValueCache tex_cache;
 
   /// Local shading frame: s = dpdu, t = ns x dpdu, n = ns.
   Frame shading_frame() const {
@@ -62,7 +92,7 @@ struct SurfaceInteraction {
 /// Texture lookup at an interaction, filtered over its footprint: anisotropically when the
 /// integrator provided the footprint ellipse, else isotropically over `uv_footprint`.
 /// Materials should look textures up through this rather than Texture::eval.
-inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
+inline Color eval_texture_uncached(const Texture& t, const SurfaceInteraction& si) {
   if (t.needs_position()) {
     TexturePoint q;
     q.uv = si.uv;
@@ -79,6 +109,14 @@ inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
   }
   if (si.uv_axis_a.x != 0.f || si.uv_axis_a.y != 0.f) return t.eval_ellipse(si.uv, si.uv_axis_a, si.uv_axis_b);
   return t.eval(si.uv, si.uv_footprint);
+}
+
+inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
+  if (t.is_constant()) return t.eval(si.uv, 0.f);
+  if (const Color* c = si.tex_cache.find(&t, 0)) return *c;
+  Color v = eval_texture_uncached(t, si);
+  si.tex_cache.put(&t, 0, v);
+  return v;
 }
 
 /// Coverage from a texture used as an alpha map: its alpha channel when it has one (image

@@ -76,6 +76,11 @@ inline void apply_normal_map(SurfaceInteraction* si, const Texture& normal_map, 
 /// n' ~ n - (dh/du) T - (dh/dv) B for a locally orthonormal (u, v) parameterization
 /// (pbrt-v4 sec. 10.5.2 BumpMap(), with its shift du = 0.5 (|dudx| + |dudy|), else 0.0005).
 inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float scale) {
+  // The gradient is a function of the point: computed once per hit (tag 1 of the cache).
+  if (const Color* g = si->tex_cache.find(&height, 1)) {
+    apply_tangent_normal(si, Vec3f(-scale * g->x, -scale * g->y, 1.f));
+    return;
+  }
   if (height.needs_position() && si->world_from_object) {
     // Procedural heights over 3D mappings: a central difference along the shading
     // tangents in world space (height and `scale` in world units: a slope of 1 per metre
@@ -85,6 +90,7 @@ inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float 
     float d = std::max(0.5f * si->world_footprint, 1e-4f);
     auto h = [&](const Vec3f& dir, float sgn) {
       SurfaceInteraction q = *si;
+      q.tex_cache.clear();  // another point
       Vec3f dw = dir * (sgn * d);
       q.p = si->p + dw;
       q.p_object = si->p_object + si->world_from_object->apply_inverse_vector(dw);
@@ -92,6 +98,7 @@ inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float 
     };
     float dhds = (h(f.s, 1.f) - h(f.s, -1.f)) / (2.f * d);
     float dhdt = (h(f.t, 1.f) - h(f.t, -1.f)) / (2.f * d);
+    si->tex_cache.put(&height, 1, Color(dhds, dhdt, 0.f));
     apply_tangent_normal(si, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
     return;
   }
@@ -101,6 +108,7 @@ inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float 
   auto h = [&](float du, float dv) { return height.eval(Vec2f(si->uv.x + du, si->uv.y + dv), fp).x; };
   float dhdu = (h(d, 0.f) - h(-d, 0.f)) / (2.f * d);
   float dhdv = (h(0.f, d) - h(0.f, -d)) / (2.f * d);
+  si->tex_cache.put(&height, 1, Color(dhdu, dhdv, 0.f));
   apply_tangent_normal(si, Vec3f(-scale * dhdu, -scale * dhdv, 1.f));
 }
 

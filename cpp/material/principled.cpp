@@ -331,6 +331,8 @@ class PrincipledMaterial final : public Material {
       metallic *= mr.z;
       rough *= mr.y;
     }
+    // Keep what this setup evaluated (textures, bump gradient) for the next call at this hit.
+    si_in.tex_cache = si.tex_cache;
     s->metallic = clamp01(metallic);
     s->r = std::max(clamp01(rough), k_min_roughness);
     float alpha = roughness_to_alpha(s->r);

@@ -57,18 +57,16 @@ class CellularTexture final : public Texture {
     // cell for per-cell values. Footprints well below it need no filtering.
     float detail = m_output == Output::Cell ? 1.f : std::fabs(m_shaping.hi - m_shaping.lo);
     if (!m_band_limit || w < 0.25f * detail) return m_shaping.color(raw(p));
-    // NOTE: cellular patterns have detail finer than the cells (edges, F2 - F1 ridges) and no
-    // octave structure to clamp, so the footprint is box-filtered by supersampling: the
-    // shaped value averaged over 9 points (the centre and a cube of half-width w / 4,
-    // i.e. a box of width w sampled at its centre and the centres of its eight octants);
-    // beyond one cell per footprint the result fades to the shaped mean (the average).
+    // NOTE: cellular patterns have detail finer than the cells (thin edges, F2 - F1 ridges)
+    // and no octave structure to clamp. The distance outputs change at most at unit rate
+    // (F1, edge) or twice that (F2 - F1) across space, so the shaping is box-filtered in
+    // closed form over the range the value sweeps within the footprint (shape_box; for the
+    // per-cell value, which is piecewise constant, the same widening softens cell borders).
+    // Beyond one cell per footprint the result fades to the shaped mean (the average).
     float a = 1.f - smoothstep(0.5f, 1.f, w);
     if (a <= 0.f) return m_average;
-    Color sum = m_shaping.color(raw(p));
-    const float h = 0.25f * w;
-    for (int k = 0; k < 8; ++k)
-      sum += m_shaping.color(raw(p + Vec3f((k & 1) ? h : -h, (k & 2) ? h : -h, (k & 4) ? h : -h)));
-    return sum * (a / 9.f) + m_average * (1.f - a);
+    float rate = m_output == Output::F2MinusF1 ? 2.f : 1.f;
+    return m_shaping.color_box(raw(p), rate * w) * a + m_average * (1.f - a);
   }
   Color eval(const Vec2f& uv, float footprint) const override {
     TexturePoint q;

@@ -116,6 +116,29 @@ struct ProceduralShaping {
     float t = shape(v);
     return ramp.empty() ? Color(t) : ramp.eval(t);
   }
+
+  /// The linear remap (no smoothstep) averaged over v +- w/2: exact box filtering of the
+  /// shaping for a field v with unit gradient (distances), in closed form.
+  /// NOTE: the antiderivative of clamp((u - lo) / (hi - lo), 0, 1) is 0 below lo,
+  /// (u - lo)^2 / (2 (hi - lo)) up to hi and (hi - lo) / 2 + (u - hi) above (the
+  /// "filtered step" of Ebert et al., "Texturing & Modeling", ch. 2).
+  float shape_box(float v, float w) const {
+    if (!(w > 1e-6f)) return shape(v);
+    float a = std::min(lo, hi), b = std::max(lo, hi);
+    auto F = [&](float u) {
+      if (u <= a) return 0.f;
+      if (u <= b) return (u - a) * (u - a) / (2.f * (b - a));
+      return 0.5f * (b - a) + (u - b);
+    };
+    float t = (F(v + 0.5f * w) - F(v - 0.5f * w)) / w;
+    if (hi < lo) t = 1.f - t;
+    t = t < 0.f ? 0.f : (t > 1.f ? 1.f : t);
+    return invert ? 1.f - t : t;
+  }
+  Color color_box(float v, float w) const {
+    float t = shape_box(v, w);
+    return ramp.empty() ? Color(t) : ramp.eval(t);
+  }
 };
 
 /// Mean colour of a procedural texture, estimated once at creation from a fixed set of

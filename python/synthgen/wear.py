@@ -76,15 +76,17 @@ def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale:
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 2.0)
     _check("roughness", roughness, 0.0, 1.0)
     _check("bump", bump, 0.0, 0.05)
-    noise = scene.add_texture("noise", {"pattern": "fbm", "octaves": 6, "mapping": "relative", "scale": float(scale),
+    # Octave counts: the mask's shape is large-scale (4 octaves), colour and bump carry the
+    # fine detail (4 and 3 octaves); each octave costs one noise evaluation per lookup.
+    noise = scene.add_texture("noise", {"pattern": "fbm", "octaves": 4, "mapping": "relative", "scale": float(scale),
                                         "seed": int(seed), "remap": [-1.0, 1.0]})
     height = scene.add_texture("gradient", {"axis": "y", "mapping": "relative", "invert": True})
     raw = scene.add_texture("blend", {"a": TextureRef(noise), "b": TextureRef(height), "op": "add",
                                       "factor": bottom_bias * 0.25})
     mask = _mask(scene, raw, amount, 0.04)
-    color = scene.add_texture("noise", dict({"pattern": "fbm", "octaves": 5, "mapping": "object", "scale": 12.0,
+    color = scene.add_texture("noise", dict({"pattern": "fbm", "octaves": 4, "mapping": "object", "scale": 12.0,
                                              "seed": int(seed) + 1, "remap": [-0.6, 0.6]}, **_ramp(colors)))
-    bump_tex = scene.add_texture("noise", {"pattern": "turbulence", "octaves": 5, "mapping": "object", "scale": 40.0,
+    bump_tex = scene.add_texture("noise", {"pattern": "turbulence", "octaves": 3, "mapping": "object", "scale": 40.0,
                                            "seed": int(seed) + 2})
     wear = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness),
                                              "metallic": 0.0, "bump_map": TextureRef(bump_tex),
