@@ -1,0 +1,139 @@
+// Texture "projector": projective texture mapping. A pinhole projector (a pose and
+// intrinsics, like a camera) projects another texture (an image or a procedural one) onto
+// whatever it faces, for models with no or unusable uvs: decals, stickers, graffiti, stripes.
+//
+// Parameters (defaults):
+//   texture            the projected texture (a texture reference; required)
+//   world_from_projector  16 numbers, row-major 4x4 (the projector looks along its +z, x right,
+//                      y down: the OpenCV convention of PinholeCamera) ...
+//   position, look_at, up ... or a position looking at a point (up [0, 1, 0])
+//   fov                vertical field of view in degrees (40) ... or fx, fy, cx, cy in pixels
+//   width, height      the projected image's size in pixels (1, 1: only the aspect and fx
+//                      matter); pixel (x, y) maps to texture uv (x / width, 1 - y / height),
+//                      so image row 0 lands at the top of the projection
+//   space              "world" or "object" (the projector moves with each object) ("world")
+//   output             "color": the texture inside the frustum, `outside` elsewhere; "mask":
+//                      1 inside the frustum, 0 outside (a mix weight) ("color")
+//   outside            colour outside the frustum (0)
+// Band-limited: the projected texture is looked up with the footprint the surface footprint
+// covers in the projected image.
+// Not done: an occlusion test (surfaces behind others, seen from the projector, are
+// projected onto as well).
+#include <array>
+
+#include "texture/procedural.h"
+#include "texture/texture_registry.h"
+
+namespace sg {
+
+namespace {
+
+class ProjectorTexture final : public Texture {
+ public:
+  ProjectorTexture(std::shared_ptr<Texture> tex, const Transform& world_from_projector, float fx, float fy, float cx,
+                   float cy, float width, float height, bool object_space, bool mask, const Color& outside)
+      : m_tex(std::move(tex)), m_T(world_from_projector), m_fx(fx), m_fy(fy), m_cx(cx), m_cy(cy), m_w(width),
+        m_h(height), m_object(object_space), m_mask(mask), m_outside(outside) {}
+
+  bool needs_position() const override { return true; }
+
+  /// Projected texture coordinates of point p (in the projector's space); false outside the
+  /// frustum. `depth` receives the distance along the projector's axis.
+  bool project(const Vec3f& p, Vec2f* uv, float* depth) const {
+    Vec3f q = m_T.apply_inverse_point(p);
+    if (!(q.z > 0.f)) return false;
+    float x = m_fx * q.x / q.z + m_cx, y = m_fy * q.y / q.z + m_cy;
+    if (!(x >= 0.f && x <= m_w && y >= 0.f && y <= m_h)) return false;
+    *uv = Vec2f(x / m_w, 1.f - y / m_h);
+    *depth = q.z;
+    return true;
+  }
+
+  Color eval_point(const TexturePoint& qp) const override {
+    Vec2f uv;
+    float z;
+    Vec3f p = m_object ? qp.p_object : qp.p_world;
+    if (!project(p, &uv, &z)) return m_mask ? Color(0.f) : m_outside;
+    if (m_mask) return Color(1.f);
+    // NOTE: a surface footprint of width f at projector depth z covers f fx / (z width) of
+    // the projected image's uv range (isotropic; pbrt-v4's projection texture mapping
+    // differentiates the same mapping).
+    float f = qp.world_footprint * (m_object ? qp.object_per_world : 1.f);
+    TexturePoint t;
+    t.uv = uv;
+    t.uv_footprint = f * std::max(m_fx / m_w, m_fy / m_h) / z;
+    return m_tex->eval_point(t);
+  }
+  Color eval(const Vec2f& uv, float footprint) const override {
+    TexturePoint q;
+    q.uv = uv;
+    q.uv_footprint = footprint;
+    return eval_point(q);
+  }
+  bool has_alpha_channel() const override { return true; }
+  float eval_alpha(const Vec2f&, float) const override { return 1.f; }
+  Color average() const override { return m_mask ? Color(0.5f) : m_tex->average() * 0.5f + m_outside * 0.5f; }
+
+ private:
+  std::shared_ptr<Texture> m_tex;
+  Transform m_T;
+  float m_fx, m_fy, m_cx, m_cy, m_w, m_h;
+  bool m_object, m_mask;
+  Color m_outside;
+};
+
+}  // namespace
+
+std::shared_ptr<Texture> create_projector_texture(const ParamSet& params, const TextureInputs& inputs) {
+  TextureRef ref;
+  if (!params.get_texture("texture", &ref)) throw Error("parameter 'texture': a texture reference is required");
+  std::shared_ptr<Texture> tex = inputs ? inputs(ref.id) : nullptr;
+  if (!tex) throw Error("parameter 'texture': texture " + std::to_string(ref.id) + " does not exist");
+  Transform T;
+  bool has_matrix = params.has("world_from_projector"), has_look = params.has("position");
+  if (has_matrix && has_look) throw Error("give either 'world_from_projector' or 'position'/'look_at', not both");
+  if (has_matrix) {
+    std::vector<float> m = params.get_floats("world_from_projector");
+    if (m.size() != 16) throw Error("parameter 'world_from_projector': needs 16 numbers (row-major 4x4)");
+    T = Transform::from_row_major(m.data(), "world_from_projector");
+  } else if (has_look) {
+    Vec3f eye = params.get_vec3("position", Vec3f(0.f)), at = params.get_vec3("look_at", Vec3f(0.f, 0.f, 1.f));
+    Vec3f up = params.get_vec3("up", Vec3f(0.f, 1.f, 0.f));
+    Vec3f z = at - eye;
+    if (!(length(z) > 0.f)) throw Error("parameters 'position' and 'look_at' must differ");
+    z = normalize(z);
+    Vec3f x = cross(z, up);  // as PinholeCamera::look_at: x right, y = z x x down
+    if (!(length(x) > 1e-6f)) throw Error("parameter 'up' is parallel to the viewing direction");
+    x = normalize(x);
+    Vec3f y = cross(z, x);
+    float m[16] = {x.x, y.x, z.x, eye.x, x.y, y.y, z.y, eye.y, x.z, y.z, z.z, eye.z, 0, 0, 0, 1};
+    T = Transform::from_row_major(m, "projector look_at");
+  } else {
+    throw Error("the projector needs a pose: 'world_from_projector' or 'position' and 'look_at'");
+  }
+  float w = params.get_float("width", 1.f), h = params.get_float("height", 1.f);
+  if (!(w > 0.f && h > 0.f)) throw Error("parameters 'width' and 'height' must be positive");
+  float fx, fy, cx, cy;
+  if (params.has("fx")) {
+    fx = params.get_float("fx", 1.f);
+    fy = params.get_float("fy", fx);
+    cx = params.get_float("cx", 0.5f * w);
+    cy = params.get_float("cy", 0.5f * h);
+    if (!(fx > 0.f && fy > 0.f)) throw Error("parameters 'fx' and 'fy' must be positive");
+  } else {
+    float fov = params.get_float("fov", 40.f);
+    if (!(fov > 0.f && fov < 179.f)) throw Error("parameter 'fov': must lie in (0, 179) degrees");
+    fy = fx = 0.5f * h / std::tan(0.5f * fov * k_pi / 180.f);
+    cx = 0.5f * w;
+    cy = 0.5f * h;
+  }
+  std::string space = params.get_string("space", "world");
+  if (space != "world" && space != "object") throw Error("parameter 'space': must be world or object");
+  std::string output = params.get_string("output", "color");
+  if (output != "color" && output != "mask") throw Error("parameter 'output': must be color or mask");
+  Color outside = params.get_color("outside", Color(0.f));
+  return std::make_shared<ProjectorTexture>(std::move(tex), T, fx, fy, cx, cy, w, h, space == "object",
+                                            output == "mask", outside);
+}
+
+}  // namespace sg
