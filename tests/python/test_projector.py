@@ -68,6 +68,7 @@ def test_mask_is_zero_outside_the_frustum(tmp_path):
     K = np.asarray(cam.K, np.float64)
     y, x = np.mgrid[0:H, 0:W].astype(np.float64) + 0.5
     z = np.asarray(r.depth, np.float64)
+    z = np.where(np.isfinite(z), z, 1.0)  # background pixels (inf depth) are excluded below
     pc = np.stack([(x - K[0, 2]) / K[0, 0] * z, (y - K[1, 2]) / K[1, 1] * z, z, np.ones_like(z)], -1)
     pw = pc @ np.asarray(wfc, np.float64).T
     wfp = np.asarray(sg.PinholeCamera.look_at((-2.0, 2.0, -3.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)), np.float64)
