@@ -90,6 +90,14 @@ class MixMaterial final : public Material {
   }
 
   uint32_t flags() const override { return m_flags; }
+  /// Cut-outs pass through: the mix is a surface where every component that has an alpha
+  /// map is opaque (a wear layer over a cut-out sign does not fill its holes). Independent
+  /// of the mask, which may need more than uv (the traversal-time test has uv only).
+  bool has_alpha() const override { return m_a->has_alpha() || m_b->has_alpha(); }
+  float alpha(const SurfaceInteraction& si) const override {
+    return (m_a->alpha_opaque(si) && m_b->alpha_opaque(si)) ? 1.f : 0.f;
+  }
+  float alpha_cutoff() const override { return 0.5f; }
   uint32_t needs() const override {
     return m_a->needs() | m_b->needs() | ((m_mask && !m_mask->is_constant()) ? uint32_t(k_needs_footprint) : 0u);
   }

@@ -136,6 +136,14 @@ def build_parser() -> argparse.ArgumentParser:
     q.set_defaults(func=_cmd_assets_fetch)
     _debug_option(p, top=False)
 
+    p = sub.add_parser("gallery", help="render the wear gallery",
+                       description="Render every wear effect on a sign, a car body panel and a sphere, with the "
+                                   "parameters under each tile.")
+    p.add_argument("-o", "--output", metavar="FILE.png", default=os.path.join("out", "gallery.png"))
+    p.add_argument("--spp", type=_positive_int, default=32, help="samples per pixel (default 32)")
+    _debug_option(p, top=False)
+    p.set_defaults(func=_cmd_gallery)
+
     p = sub.add_parser("schema", help="describe the scene file (or scenario) format",
                        description="Print every key of the scene file format (or, with --scenario, of the scenario "
                                    "format) with its type, default, range and meaning.")
@@ -206,6 +214,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     scene, settings, meta = build_demo_scene(args.width, args.height, **_overrides(args))
     return _render_and_write(scene, settings, meta, args.output, "demo")
+
+
+def _cmd_gallery(args: argparse.Namespace) -> int:
+    from . import gallery
+
+    os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
+    print(gallery.write_gallery(args.output, spp=args.spp))
+    return EXIT_OK
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:

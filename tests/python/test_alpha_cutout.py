@@ -319,3 +319,19 @@ def test_save_and_replay_keep_the_cutout(tmp_path):
     assert loaded.commit_stats["alpha_tested_meshes"] == 1
     np.testing.assert_array_equal(r1.instance_id, expected_cutout_labels()[0])
     np.testing.assert_array_equal(r1.rgb, r0.rgb)
+
+
+def test_cutouts_pass_through_a_mix(tmp_path):
+    """A wear layer mixed over a cut-out material keeps the holes: labels identical to the
+    base material's, for camera and shadow rays alike."""
+    s, mat = cutout_scene(tmp_path)
+    from synthgen import wear
+
+    worn = wear.rust(s, mat, amount=0.5, seed=2)
+    s.set_instance_material(0, worn)
+    r = s.render(spp=1, max_depth=2, seed=3)
+    ids, depth, on_quad = expected_cutout_labels()
+    np.testing.assert_array_equal(r.instance_id, ids)
+    mix_const = s.add_material("mix", {"material_a": mat, "material_b": s.add_material("diffuse", {}), "weight": 0.5})
+    s.set_instance_material(0, mix_const)
+    np.testing.assert_array_equal(s.render(spp=1, max_depth=2, seed=3).instance_id, ids)

@@ -88,3 +88,16 @@ def test_model_without_uvs_carries_rust_scratches_ice_and_dirt():
         changed = np.abs(r.albedo - plain.albedo).max(axis=-1) > 0.05
         frac = changed[obj].mean()
         assert 0.02 < frac < 0.98, f"{effect}: {frac:.3f} of the object's pixels changed albedo"
+
+
+def test_gallery_renders_every_effect_on_every_object():
+    from synthgen import gallery
+
+    img = gallery.render_gallery(tile_w=48, tile_h=36, spp=1)
+    rows, cols = len(gallery.OBJECTS), len(gallery.EFFECTS)
+    assert img.shape == (rows * (36 + 32), cols * 48, 3)
+    tiles = img.reshape(rows, 36 + 32, cols, 48, 3)[:, :36]
+    # Every worn tile differs from the clean one of its row.
+    for r in range(rows):
+        for c in range(1, cols):
+            assert np.abs(tiles[r, :, c] - tiles[r, :, 0]).mean() > 1e-3, (gallery.OBJECTS[r], gallery.EFFECTS[c][0])

@@ -1,0 +1,134 @@
+"""The wear gallery: every effect on a road sign, a car body panel and a sphere, one tile each,
+with the effect's parameters printed under it (``synthgen gallery -o docs/gallery.png``).
+
+Columns: clean, rust, dirt, scratches, ice, decal (a licence plate projected onto the object
+with a ``projector`` texture). Rows: a stop sign (pictogram texture with an alpha cut-out on
+a plate), a bent car body panel (car paint), a sphere (painted metal). Deterministic.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from typing import Any, Dict, List, Optional, Tuple
+
+import numpy as np
+
+from . import plates, primitives as P, raster as R, signs, wear
+from ._core import PinholeCamera, Scene, TextureRef
+from .writers import to_srgb8, write_exr
+
+__all__ = ["EFFECTS", "OBJECTS", "render_gallery"]
+
+EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
+    ("clean", {}),
+    ("rust", {"amount": 0.4, "scale": 3, "bottom_bias": 0.8}),
+    ("dirt", {"amount": 0.45, "scale": 5, "bottom_bias": 1.5}),
+    ("scratches", {"density": 10, "width": 0.05, "amount": 0.7}),
+    ("ice", {"amount": 0.5, "scale": 4, "top_bias": 0.8}),
+    ("decal", {"plate": "de"}),
+]
+OBJECTS = ("sign", "panel", "sphere")
+
+
+def _panel_mesh(width: float = 1.4, height: float = 0.8, bend: float = 0.25, n: int = 48) -> Dict[str, np.ndarray]:
+    """A car-door-like panel: a sheet curved about the vertical axis (no uvs needed)."""
+    xs = np.linspace(-0.5 * width, 0.5 * width, n)
+    ys = np.linspace(0.0, height, 8)
+    X, Y = np.meshgrid(xs, ys)
+    Z = bend * (X / (0.5 * width)) ** 2 - 0.05 * np.sin(np.pi * Y / height)
+    pos = np.stack([X, Y, Z], -1).reshape(-1, 3).astype(np.float32)
+    idx = []
+    for j in range(len(ys) - 1):
+        for i in range(n - 1):
+            a, b, c, d = j * n + i, j * n + i + 1, (j + 1) * n + i, (j + 1) * n + i + 1
+            idx += [[a, c, b], [b, c, d]]
+    uv = np.stack([(X - X.min()) / np.ptp(X), (Y - Y.min()) / np.ptp(Y)], -1).reshape(-1, 2).astype(np.float32)
+    return {"positions": pos, "indices": np.asarray(idx, np.uint32), "uvs": uv}
+
+
+def _tile(obj: str, effect: str, params: Dict[str, Any], tmp: str, w: int, h: int, spp: int) -> np.ndarray:
+    s = Scene()
+    ground = P.plane(20.0, 20.0)
+    s.add_instance(s.add_mesh(ground["positions"], ground["indices"], normals=ground["normals"]), np.eye(4),
+                   material_id=s.add_material("diffuse", {"albedo": 0.35}))
+    target = (0.0, 0.55, 0.0)
+    if obj == "sign":
+        sign = signs.render_sign("stop", None, 256)
+        path = os.path.join(tmp, "stop.exr")
+        if not os.path.exists(path):
+            write_exr(path, sign["rgba"])
+        tex = s.add_texture("image", {"filename": path, "wrap": "clamp", "colorspace": "linear"})
+        base = s.add_material("principled", {"base_color": TextureRef(tex), "roughness": 0.4, "alpha": TextureRef(tex),
+                                             "alpha_mode": "mask"})
+        q = np.array([[-0.4, 0.3, 0.0], [0.4, 0.3, 0.0], [0.4, 1.1, 0.0], [-0.4, 1.1, 0.0]], np.float32)
+        mesh = s.add_mesh(q, np.array([[0, 2, 1], [0, 3, 2]], np.uint32),
+                          uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32))
+        pole = P.box((0.05, 0.3, 0.05))
+        s.add_instance(s.add_mesh(pole["positions"], pole["indices"], normals=pole["normals"]),
+                       P.translate([0.0, 0.15, 0.02]), material_id=s.add_material("conductor", {"metal": "iron",
+                                                                                              "roughness": 0.5}))
+        world = P.rotate([0, 1, 0], 180.0)
+    elif obj == "panel":
+        base = s.add_material("coated", {"albedo": [0.5, 0.03, 0.03], "roughness": 0.05})
+        m = _panel_mesh()
+        mesh = s.add_mesh(m["positions"], m["indices"], uvs=m["uvs"])
+        world = P.translate([0.0, 0.15, 0.0]) @ P.rotate([0, 1, 0], 180.0)
+    else:
+        base = s.add_material("coated", {"albedo": [0.05, 0.2, 0.45], "roughness": 0.1})
+        sp = P.uv_sphere(0.45, 96, 48)
+        mesh = s.add_mesh(sp["positions"], sp["indices"], normals=sp["normals"])
+        world = P.translate([0.0, 0.45, 0.0])
+    mat = base
+    if effect in ("rust", "dirt", "scratches", "ice"):
+        mat = getattr(wear, effect)(s, base, seed=3, **params)
+    elif effect == "decal":
+        reg = plates.random_registration(params.get("plate", "de"), np.random.default_rng(5))
+        plate = plates.render_plate(reg, px_per_mm=1.0)
+        path = os.path.join(tmp, "plate.exr")
+        write_exr(path, plate["rgb"])
+        img = s.add_texture("image", {"filename": path, "wrap": "clamp", "colorspace": "linear"})
+        aspect = plate["size_mm"][0] / plate["size_mm"][1]
+        common = {"position": [0.0, target[1], -3.0], "look_at": list(target), "fov": 4.2,
+                  "width": aspect, "height": 1.0}
+        proj = s.add_texture("projector", dict(common, texture=TextureRef(img)))
+        mask = s.add_texture("projector", dict(common, texture=TextureRef(img), output="mask"))
+        decal = s.add_material("principled", {"base_color": TextureRef(proj), "roughness": 0.3})
+        mat = s.add_material("mix", {"material_a": base, "material_b": decal, "weight": TextureRef(mask)})
+    s.add_instance(mesh, world, class_id=1, material_id=mat)
+    s.add_light("sky", {"elevation": 35.0, "azimuth": 150.0, "turbidity": 3.0, "strength": 0.02})
+    pose = PinholeCamera.look_at((0.9, 1.0, -2.6), target, (0.0, 1.0, 0.0))
+    s.set_camera(PinholeCamera.from_fov(30.0, w, h, pose))
+    return np.asarray(s.render(spp=spp, max_depth=6, seed=1).rgb)
+
+
+def _caption(text: str, w: int, h: int) -> np.ndarray:
+    img = R.canvas(h, w, (0.92, 0.92, 0.92))
+    font = R.font_path("DejaVuSans")
+    lines = text.split("\n")
+    for i, line in enumerate(lines):
+        m = R.text_mask(h, w, line, 4, 12 + 13 * i, 10, font)
+        R.paint(img, m, (0.05, 0.05, 0.05))
+    return img[..., :3]
+
+
+def render_gallery(tile_w: int = 240, tile_h: int = 180, spp: int = 32) -> np.ndarray:
+    """The gallery image (linear RGB): rows OBJECTS, columns EFFECTS, a caption under each tile."""
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="synthgen-gallery-") as tmp:
+        for obj in OBJECTS:
+            row = []
+            for effect, params in EFFECTS:
+                tile = _tile(obj, effect, params, tmp, tile_w, tile_h, spp)
+                ptxt = ", ".join(f"{k}={v}" for k, v in params.items())
+                cap = _caption(f"{obj}: {effect}\n{ptxt}" if ptxt else f"{obj}: {effect}", tile_w, 32)
+                # Captions are in display values already: undo the sRGB encoding applied on output.
+                cap = np.where(cap <= 0.04045, cap / 12.92, ((cap + 0.055) / 1.055) ** 2.4)
+                row.append(np.concatenate([tile, cap], axis=0))
+            rows.append(np.concatenate(row, axis=1))
+    return np.concatenate(rows, axis=0).astype(np.float32)
+
+
+def write_gallery(path: str, **kw: Any) -> str:
+    from .writers import write_srgb_png
+
+    return write_srgb_png(path, render_gallery(**kw))
