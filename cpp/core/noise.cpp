@@ -18,11 +18,14 @@ inline float lerp(float t, float a, float b) { return a + t * (b - a); }
 
 /// Gradient dot product with one of the 12 edge directions of a cube (Perlin 2002, sec. 3;
 /// 16 cases, 4 repeated, as in his reference implementation).
+/// The 16 gradient vectors of grad3 (Perlin's reference implementation), as a table so
+/// that the dot product is branch-free.
+constexpr float k_grad3[16][3] = {{1, 1, 0},  {-1, 1, 0}, {1, -1, 0}, {-1, -1, 0}, {1, 0, 1},  {-1, 0, 1},
+                                  {1, 0, -1}, {-1, 0, -1}, {0, 1, 1}, {0, -1, 1}, {0, 1, -1}, {0, -1, -1},
+                                  {1, 1, 0},  {0, -1, 1}, {-1, 1, 0}, {0, -1, -1}};
 inline float grad3(int h, float x, float y, float z) {
-  h &= 15;
-  float u = h < 8 ? x : y;
-  float v = h < 4 ? y : (h == 12 || h == 14 ? x : z);
-  return ((h & 1) ? -u : u) + ((h & 2) ? -v : v);
+  const float* g = k_grad3[h & 15];
+  return g[0] * x + g[1] * y + g[2] * z;
 }
 
 /// 2D gradients: 8 unit directions (axes and diagonals).
@@ -85,6 +88,45 @@ float NoiseBasis::perlin(const Vec3f& pt) const {
   return std::max(-1.f, std::min(1.f, r));
 }
 
+namespace {
+/// The gradient vector behind grad3(h, .): grad3(h, d) = dot(grad3_vec(h), d).
+inline Vec3f grad3_vec(int h) {
+  const float* g = k_grad3[h & 15];
+  return Vec3f(g[0], g[1], g[2]);
+}
+inline float dfade(float t) { return 30.f * t * t * (t * (t - 2.f) + 1.f); }
+}  // namespace
+
+float NoiseBasis::perlin_grad(const Vec3f& pt, Vec3f* grad) const {
+  // NOTE: the trilinear form of gradient noise and its derivative (Quilez, "Gradient noise
+  // derivatives", 2017): n = k0 + k1 u + k2 v + k3 w + k4 uv + k5 vw + k6 wu + k7 uvw with the
+  // corner values k, and dn = sum of the corner gradients blended the same way plus the
+  // fade derivatives times the partial blends.
+  int X = fast_floor(pt.x), Y = fast_floor(pt.y), Z = fast_floor(pt.z);
+  float x = pt.x - float(X), y = pt.y - float(Y), z = pt.z - float(Z);
+  X &= 255;
+  Y &= 255;
+  Z &= 255;
+  const auto& P = m_perm;
+  int A = P[size_t(X)] + Y, AA = P[size_t(A)] + Z, AB = P[size_t(A + 1)] + Z;
+  int B = P[size_t(X + 1)] + Y, BA = P[size_t(B)] + Z, BB = P[size_t(B + 1)] + Z;
+  Vec3f ga = grad3_vec(P[size_t(AA)]), gb = grad3_vec(P[size_t(BA)]), gc = grad3_vec(P[size_t(AB)]),
+        gd = grad3_vec(P[size_t(BB)]), ge = grad3_vec(P[size_t(AA + 1)]), gf = grad3_vec(P[size_t(BA + 1)]),
+        gg = grad3_vec(P[size_t(AB + 1)]), gh = grad3_vec(P[size_t(BB + 1)]);
+  float va = dot(ga, Vec3f(x, y, z)), vb = dot(gb, Vec3f(x - 1, y, z)), vc = dot(gc, Vec3f(x, y - 1, z)),
+        vd = dot(gd, Vec3f(x - 1, y - 1, z)), ve = dot(ge, Vec3f(x, y, z - 1)), vf = dot(gf, Vec3f(x - 1, y, z - 1)),
+        vg = dot(gg, Vec3f(x, y - 1, z - 1)), vh = dot(gh, Vec3f(x - 1, y - 1, z - 1));
+  float u = fade(x), v = fade(y), w = fade(z), du = dfade(x), dv = dfade(y), dw = dfade(z);
+  float k0 = va, k1 = vb - va, k2 = vc - va, k3 = ve - va, k4 = va - vb - vc + vd, k5 = va - vc - ve + vg,
+        k6 = va - vb - ve + vf, k7 = -va + vb + vc - vd + ve - vf - vg + vh;
+  Vec3f g0 = ga, g1 = gb - ga, g2 = gc - ga, g3 = ge - ga, g4 = ga - gb - gc + gd, g5 = ga - gc - ge + gg,
+        g6 = ga - gb - ge + gf, g7 = -ga + gb + gc - gd + ge - gf - gg + gh;
+  *grad = g0 + g1 * u + g2 * v + g3 * w + g4 * (u * v) + g5 * (v * w) + g6 * (w * u) + g7 * (u * v * w) +
+          Vec3f(du * (k1 + k4 * v + k6 * w + k7 * v * w), dv * (k2 + k5 * w + k4 * u + k7 * w * u),
+                dw * (k3 + k6 * u + k5 * v + k7 * u * v));
+  return k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
+}
+
 float NoiseBasis::perlin2(float px, float py) const {
   int X = fast_floor(px), Y = fast_floor(py);
   float x = px - float(X), y = py - float(Y);
@@ -133,7 +175,7 @@ inline float basis_noise(const NoiseBasis& b, NoiseKind kind, const Vec3f& p) {
 template <bool kAbs>
 float fractal(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint) {
   float s = 1.f, w = 1.f, sum = 0.f, wsum = 0.f;
-  const float wmul = std::pow(f.lacunarity, -f.H);
+  const float wmul = f.weight_ratio();
   const float mean = kAbs ? mean_abs_noise(kind) : 0.f;
   for (int i = 0; i < f.octaves; ++i) {
     float a = octave_fade(s, footprint);
@@ -154,6 +196,48 @@ float fractal(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Fractal
 
 }  // namespace
 
+namespace {
+
+template <bool kAbs>
+float fractal_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad) {
+  float s = 1.f, w = 1.f, sum = 0.f, wsum = 0.f;
+  Vec3f g(0.f);
+  const float wmul = f.weight_ratio();
+  const float mean = kAbs ? mean_abs_noise(NoiseKind::Perlin) : 0.f;
+  for (int i = 0; i < f.octaves; ++i) {
+    float a = octave_fade(s, footprint);
+    if (a > 0.f) {
+      Vec3f q = p * s + Vec3f(17.3f, -41.7f, 29.1f) * float(i);
+      Vec3f gn;
+      float n = b.perlin_grad(q, &gn);
+      if (kAbs && n < 0.f) {
+        n = -n;
+        gn = -gn;
+      }
+      sum += w * (a * n + (1.f - a) * mean);
+      g += gn * (w * a * s);
+    } else {
+      sum += w * mean;
+    }
+    wsum += w;
+    s *= f.lacunarity;
+    w *= wmul;
+  }
+  float norm = (f.normalize && wsum > 0.f) ? 1.f / wsum : 1.f;
+  *grad = g * norm;
+  return sum * norm;
+}
+
+}  // namespace
+
+float fbm_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad) {
+  return fractal_grad<false>(b, p, f, footprint, grad);
+}
+
+float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad) {
+  return fractal_grad<true>(b, p, f, footprint, grad);
+}
+
 float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint) {
   return fractal<false>(b, kind, p, f, footprint);
 }
@@ -164,35 +248,43 @@ float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Frac
 
 CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter, bool want_edge) {
   int X = fast_floor(p.x), Y = fast_floor(p.y), Z = fast_floor(p.z);
+  // One hash per cell: its 32 bits give the cell id and three 10-bit jitter offsets.
   auto feature = [&](int i, int j, int k, uint32_t* h) {
     uint32_t a = b.hash(i, j, k);
-    uint32_t c = uint32_t(mix64(uint64_t(a) * 0x9e3779b97f4a7c15ull) >> 32);
-    uint32_t d = uint32_t(mix64(uint64_t(c) ^ 0x5851f42d4c957f2dull) >> 32);
     *h = a;
-    auto unit = [](uint32_t v) { return float(v >> 8) * 0x1p-24f; };
-    return Vec3f(float(i) + 0.5f + jitter * (unit(a) - 0.5f), float(j) + 0.5f + jitter * (unit(c) - 0.5f),
-                 float(k) + 0.5f + jitter * (unit(d) - 0.5f));
+    auto unit = [](uint32_t v) { return (float(v & 1023u) + 0.5f) * (1.f / 1024.f); };
+    return Vec3f(float(i) + 0.5f + jitter * (unit(a) - 0.5f), float(j) + 0.5f + jitter * (unit(a >> 10) - 0.5f),
+                 float(k) + 0.5f + jitter * (unit(a >> 20) - 0.5f));
   };
   // Pass 1: nearest and second-nearest feature points over the 27 neighbouring cells
-  // (enough for jitter <= 1: a feature point never leaves its cell).
+  // (enough for jitter <= 1: a feature point never leaves its cell). Cells are visited by
+  // increasing distance of their box to p (own cell, faces, edges, corners) and skipped
+  // when that box is farther than the current second-nearest point.
+  static const int8_t k_order[27][3] = {
+      {0, 0, 0},  {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},   {0, 0, -1},  {0, 0, 1},
+      {-1, -1, 0}, {1, -1, 0},  {-1, 1, 0},  {1, 1, 0},   {-1, 0, -1}, {1, 0, -1},  {-1, 0, 1},
+      {1, 0, 1},  {0, -1, -1}, {0, 1, -1},  {0, -1, 1},  {0, 1, 1},   {-1, -1, -1}, {1, -1, -1},
+      {-1, 1, -1}, {1, 1, -1},  {-1, -1, 1}, {1, -1, 1},  {-1, 1, 1},  {1, 1, 1}};
+  const Vec3f f(p.x - float(X), p.y - float(Y), p.z - float(Z));  // position inside the own cell
+  auto axis_gap = [](int o, float t) { return o < 0 ? t : (o > 0 ? 1.f - t : 0.f); };
   CellularResult r;
   float d1 = k_inf, d2 = k_inf;
   Vec3f nearest;
-  for (int k = -1; k <= 1; ++k)
-    for (int j = -1; j <= 1; ++j)
-      for (int i = -1; i <= 1; ++i) {
-        uint32_t h;
-        Vec3f f = feature(X + i, Y + j, Z + k, &h);
-        float d = length_squared(f - p);
-        if (d < d1) {
-          d2 = d1;
-          d1 = d;
-          nearest = f;
-          r.cell_hash = h;
-        } else if (d < d2) {
-          d2 = d;
-        }
-      }
+  for (const auto& o : k_order) {
+    float gx = axis_gap(o[0], f.x), gy = axis_gap(o[1], f.y), gz = axis_gap(o[2], f.z);
+    if (gx * gx + gy * gy + gz * gz >= d2) continue;
+    uint32_t h;
+    Vec3f fp = feature(X + o[0], Y + o[1], Z + o[2], &h);
+    float d = length_squared(fp - p);
+    if (d < d1) {
+      d2 = d1;
+      d1 = d;
+      nearest = fp;
+      r.cell_hash = h;
+    } else if (d < d2) {
+      d2 = d;
+    }
+  }
   r.f1 = std::sqrt(d1);
   r.f2 = std::sqrt(d2);
   if (!want_edge) return r;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -17,6 +18,8 @@ class NoiseBasis {
   explicit NoiseBasis(uint64_t seed = 0);
   /// Improved Perlin gradient noise in [-1, 1] (Perlin 2002, "Improving Noise"), 3D.
   float perlin(const Vec3f& p) const;
+  /// perlin() and its gradient (analytic, without the final clamp to [-1, 1]).
+  float perlin_grad(const Vec3f& p, Vec3f* grad) const;
   /// 2D Perlin noise in [-1, 1] (gradients on the unit circle).
   float perlin2(float x, float y) const;
   /// Value noise in [-1, 1]: random lattice values, quintic interpolation.
@@ -39,6 +42,8 @@ struct FractalParams {
   float H = 1.f;  ///< spectral exponent: w_i = lacunarity^(-H i)
   /// Divide by sum_i w_i, so fBm stays in [-1, 1] and turbulence in [0, 1].
   bool normalize = true;
+  /// w_i / w_{i-1} = lacunarity^-H.
+  float weight_ratio() const { return std::pow(lacunarity, -H); }
 };
 
 /// Fractal Brownian motion sum_i w_i noise(s_i p).
@@ -49,6 +54,9 @@ float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalPara
 /// Turbulence sum_i w_i |noise(s_i p)|, band-limited like fbm (faded octaves are replaced
 /// by the mean of |noise|).
 float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint = 0.f);
+/// fbm / turbulence (Perlin basis) with their analytic gradient in the units of p.
+float fbm_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad);
+float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad);
 /// Fade weight of an octave of frequency `freq` for a footprint (1 = kept, 0 = removed).
 float octave_fade(float freq, float footprint);
 /// Mean of |noise| over space (used for faded turbulence octaves).

@@ -105,10 +105,8 @@ class PathTracer {
     SurfaceInteraction si = make_interaction(inst, hit, (needs & k_needs_tangent) != 0);
     if (m_s.texture_filtering) {
       st.cone_width += st.cone_spread * hit.t;  // ray_cone.h, eq. (29)
-      if (needs & k_needs_footprint) {
-        set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
-        si.world_footprint = surface_footprint(st.cone_width, st.ray.d, si.ng);
-      }
+      if (needs & k_needs_footprint) set_ray_cone_footprint(&si, inst, hit.prim, st.ray.d, st.cone_width);
+      si.world_footprint = surface_footprint(st.cone_width, st.ray.d, si.ng);
     }
     Vec3f wo = -st.ray.d;
     bool shadow_requested = false;

@@ -260,7 +260,7 @@ class CoatedMaterial final : public Material {
 
   Color albedo(const SurfaceInteraction& si) const override { return eval_texture(*m_albedo, si); }
 
-  uint32_t needs() const override { return m_albedo->is_constant() ? 0u : uint32_t(k_needs_footprint); }
+  uint32_t needs() const override { return texture_needs(*m_albedo); }
   uint32_t flags() const override {
     return k_bsdf_diffuse | k_bsdf_reflection | (m_smooth ? k_bsdf_delta : k_bsdf_glossy);
   }

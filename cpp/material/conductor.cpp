@@ -119,7 +119,7 @@ class ConductorMaterial final : public Material {
   uint32_t needs() const override {
     // Isotropic roughness does not depend on the tangent's direction (any frame around ns).
     return (m_ggx.ax != m_ggx.ay ? uint32_t(k_needs_tangent) : 0u) |
-           (m_tint->is_constant() ? 0u : uint32_t(k_needs_footprint));
+           texture_needs(*m_tint);
   }
 
  private:

@@ -169,7 +169,7 @@ class DielectricMaterial final : public Material {
   /// specular surfaces, report the transmittance tint (1 for clear glass).
   Color albedo(const SurfaceInteraction& si) const override { return transmittance(si); }
 
-  uint32_t needs() const override { return m_transmittance->is_constant() ? 0u : uint32_t(k_needs_footprint); }
+  uint32_t needs() const override { return texture_needs(*m_transmittance); }
   uint32_t flags() const override {
     if (m_smooth) return k_bsdf_delta | k_bsdf_reflection | k_bsdf_transmission;
     if (m_thin) return k_bsdf_glossy | k_bsdf_reflection | k_bsdf_delta | k_bsdf_transmission;

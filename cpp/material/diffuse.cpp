@@ -2,38 +2,59 @@
 // Alpha cut-out (glTF alphaMode MASK): `alpha` is a scalar or a texture (its alpha channel
 // if it has one, else its first channel; see eval_alpha_texture), `alpha_cutoff` in [0, 1]
 // (0.5): where alpha < alpha_cutoff there is no surface (Material::has_alpha).
+// Bump mapping: `bump_map` (a height texture, e.g. procedural noise) times `bump_scale`
+// (normal_mapping.h apply_bump_map).
 #include "material/lambert.h"
+#include "material/normal_mapping.h"
 #include "material/material_registry.h"
 
 namespace sg {
 
 class DiffuseMaterial final : public Material {
  public:
-  DiffuseMaterial(std::shared_ptr<Texture> albedo, std::shared_ptr<Texture> alpha, float alpha_cutoff)
-      : m_albedo(std::move(albedo)), m_alpha(std::move(alpha)), m_alpha_cutoff(alpha_cutoff) {}
+  DiffuseMaterial(std::shared_ptr<Texture> albedo, std::shared_ptr<Texture> alpha, float alpha_cutoff,
+                  std::shared_ptr<Texture> bump, float bump_scale)
+      : m_albedo(std::move(albedo)), m_alpha(std::move(alpha)), m_alpha_cutoff(alpha_cutoff), m_bump(std::move(bump)),
+        m_bump_scale(bump_scale) {}
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
+    if (m_bump) return lambert::eval(bumped(si), wo, wi, eval_texture(*m_albedo, si));
     return lambert::eval(si, wo, wi, eval_texture(*m_albedo, si));
   }
   float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
-    return lambert::pdf(si, wo, wi);
+    return m_bump ? lambert::pdf(bumped(si), wo, wi) : lambert::pdf(si, wo, wi);
   }
   Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const override {
+    if (m_bump) return lambert::eval_pdf(bumped(si), wo, wi, eval_texture(*m_albedo, si), pdf_out);
     return lambert::eval_pdf(si, wo, wi, eval_texture(*m_albedo, si), pdf_out);
   }
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
+    if (m_bump) return lambert::sample(bumped(si), wo, u, eval_texture(*m_albedo, si), out);
     return lambert::sample(si, wo, u, eval_texture(*m_albedo, si), out);
   }
   Color albedo(const SurfaceInteraction& si) const override { return eval_texture(*m_albedo, si); }
   uint32_t flags() const override { return k_bsdf_diffuse | k_bsdf_reflection; }
   float alpha(const SurfaceInteraction& si) const override { return m_alpha ? eval_alpha_texture(*m_alpha, si) : 1.f; }
   bool has_alpha() const override { return m_alpha != nullptr; }
-  uint32_t needs() const override { return m_albedo->is_constant() ? 0u : uint32_t(k_needs_footprint); }
+  uint32_t needs() const override {
+    return texture_needs(*m_albedo) | (m_bump ? uint32_t(k_needs_tangent) | texture_needs(*m_bump) : 0u);
+  }
   float alpha_cutoff() const override { return m_alpha_cutoff; }
 
  private:
+  /// The interaction with the bump-mapped shading normal (the gradient is computed once
+  /// per hit: SurfaceInteraction::tex_cache).
+  SurfaceInteraction bumped(const SurfaceInteraction& si) const {
+    SurfaceInteraction b = si;
+    apply_bump_map(&b, *m_bump, m_bump_scale);
+    si.tex_cache = b.tex_cache;
+    return b;
+  }
+
   std::shared_ptr<Texture> m_albedo;
   std::shared_ptr<Texture> m_alpha;  ///< null: opaque everywhere (no alpha test)
   float m_alpha_cutoff = 0.5f;
+  std::shared_ptr<Texture> m_bump;   ///< height map (null: none)
+  float m_bump_scale = 1.f;
 };
 
 std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const MaterialContext& ctx) {
@@ -55,7 +76,14 @@ std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const 
     // A constant alpha at or above the cutoff is an opaque material: no alpha test at all.
     if (a < cutoff) alpha = make_constant_texture(Color(a));
   }
-  return std::make_shared<DiffuseMaterial>(albedo, alpha, cutoff);
+  std::shared_ptr<Texture> bump;
+  if (params.get_texture("bump_map", &ref)) {
+    bump = ctx.textures(ref.id);
+    if (!bump) throw Error("parameter 'bump_map': texture " + std::to_string(ref.id) + " does not exist");
+  }
+  float bump_scale = params.get_float("bump_scale", 1.f);
+  if (!(bump_scale >= -100.f && bump_scale <= 100.f)) throw Error("parameter 'bump_scale': must lie in [-100, 100]");
+  return std::make_shared<DiffuseMaterial>(albedo, alpha, cutoff, bump, bump_scale);
 }
 
 }  // namespace sg

@@ -34,7 +34,7 @@ class EmissiveMaterial final : public Material {
   Color average_emission() const override { return m_radiance; }
   bool two_sided_emission() const override { return m_two_sided; }
   bool uniform_emission() const override { return true; }
-  uint32_t needs() const override { return m_albedo->is_constant() ? 0u : uint32_t(k_needs_footprint); }
+  uint32_t needs() const override { return texture_needs(*m_albedo); }
 
  private:
   Color m_radiance;

@@ -150,6 +150,12 @@ struct BsdfSample {
   float eta = 1.f;  ///< relative index of refraction of a transmission event (1 otherwise)
 };
 
+/// The MaterialNeeds bits of a texture: k_needs_footprint when it is filtered over the uv
+/// footprint (not for constants or 3D-mapped procedural textures).
+inline uint32_t texture_needs(const Texture& t) {
+  return (t.is_constant() || !t.needs_uv_footprint()) ? 0u : uint32_t(k_needs_footprint);
+}
+
 class Material {
  public:
   /// flags(), needs() and is_emissive(), which are fixed once a material is built.

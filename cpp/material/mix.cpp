@@ -99,7 +99,7 @@ class MixMaterial final : public Material {
   }
   float alpha_cutoff() const override { return 0.5f; }
   uint32_t needs() const override {
-    return m_a->needs() | m_b->needs() | ((m_mask && !m_mask->is_constant()) ? uint32_t(k_needs_footprint) : 0u);
+    return m_a->needs() | m_b->needs() | (m_mask ? texture_needs(*m_mask) : 0u);
   }
 
   Color emission(const SurfaceInteraction& si, const Vec3f& wo) const override {

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstring>
 
 #include "material/material.h"
 
@@ -75,13 +76,55 @@ inline void apply_normal_map(SurfaceInteraction* si, const Texture& normal_map, 
 /// NOTE: Blinn 1978, "Simulation of Wrinkled Surfaces"; the displaced-surface normal
 /// n' ~ n - (dh/du) T - (dh/dv) B for a locally orthonormal (u, v) parameterization
 /// (pbrt-v4 sec. 10.5.2 BumpMap(), with its shift du = 0.5 (|dudx| + |dudy|), else 0.0005).
+inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& height, float scale);
+
 inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float scale) {
+  // The bumped frame is a function of the point and `scale`: computed once per hit and kept
+  // in the texture cache (keys next to the texture's address, the scale's bits as the tag).
+  const char* key = reinterpret_cast<const char*>(&height);
+  int tag;
+  std::memcpy(&tag, &scale, sizeof(tag));
+  const Color* ns = si->tex_cache.find(key + 1, tag);
+  const Color* dpdu = ns ? si->tex_cache.find(key + 2, tag) : nullptr;
+  if (ns && dpdu) {
+    si->ns = *ns;
+    si->dpdu = *dpdu;
+    return;
+  }
+  apply_bump_map_uncached(si, height, scale);
+  si->tex_cache.put(key + 1, tag, si->ns);
+  si->tex_cache.put(key + 2, tag, si->dpdu);
+}
+
+inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& height, float scale) {
   // The gradient is a function of the point: computed once per hit (tag 1 of the cache).
   if (const Color* g = si->tex_cache.find(&height, 1)) {
     apply_tangent_normal(si, Vec3f(-scale * g->x, -scale * g->y, 1.f));
     return;
   }
   if (height.needs_position() && si->world_from_object) {
+    // Analytic gradient when the texture has one (procedural noise): one evaluation.
+    TexturePoint tq;
+    tq.uv = si->uv;
+    tq.uv_footprint = si->uv_footprint;
+    tq.p_world = si->p;
+    tq.p_object = si->p_object;
+    tq.object_lo = si->object_lo;
+    tq.object_hi = si->object_hi;
+    tq.world_footprint = si->world_footprint;
+    tq.object_per_world = si->object_per_world;
+    Vec3f g;
+    bool world_space;
+    if (height.eval_gradient(tq, &g, &world_space)) {
+      Frame f = si->shading_frame();
+      auto along = [&](const Vec3f& dir) {
+        return dot(g, world_space ? dir : si->world_from_object->apply_inverse_vector(dir));
+      };
+      float dhds = along(f.s), dhdt = along(f.t);
+      si->tex_cache.put(&height, 1, Color(dhds, dhdt, 0.f));
+      apply_tangent_normal(si, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
+      return;
+    }
     // Procedural heights over 3D mappings: a central difference along the shading
     // tangents in world space (height and `scale` in world units: a slope of 1 per metre
     // tilts by 45 degrees), over half the world footprint or 0.1 mm, with p_object moved

@@ -43,6 +43,9 @@ class BlendTexture final : public Texture {
   }
 
   bool needs_position() const override { return m_position; }
+  bool needs_uv_footprint() const override {
+    return m_a->needs_uv_footprint() || m_b->needs_uv_footprint() || m_f->needs_uv_footprint();
+  }
   Color eval_point(const TexturePoint& q) const override {
     return combine(m_a->eval_point(q), m_b->eval_point(q), m_f->eval_point(q).x);
   }

@@ -50,6 +50,7 @@ class CellularTexture final : public Texture {
   }
 
   bool needs_position() const override { return m_mapping.needs_position(); }
+  bool needs_uv_footprint() const override { return !m_mapping.needs_position(); }
   Color eval_point(const TexturePoint& q) const override {
     float w;
     Vec3f p = m_mapping.point(q, &w);

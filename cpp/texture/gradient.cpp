@@ -22,6 +22,7 @@ class GradientTexture final : public Texture {
     m_average = s / 256.f;
   }
   bool needs_position() const override { return m_mapping.needs_position(); }
+  bool needs_uv_footprint() const override { return !m_mapping.needs_position(); }
   Color eval_point(const TexturePoint& q) const override {
     float w;
     Vec3f p = m_mapping.point(q, &w);

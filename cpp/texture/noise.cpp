@@ -45,6 +45,20 @@ class NoiseTexture final : public Texture {
   }
 
   bool needs_position() const override { return m_mapping.needs_position(); }
+  bool needs_uv_footprint() const override { return !m_mapping.needs_position(); }
+  bool eval_gradient(const TexturePoint& q, Vec3f* grad, bool* world_space) const override {
+    if (m_basis_kind != NoiseKind::Perlin || m_pattern == Pattern::Plain || !m_shaping.ramp.empty()) return false;
+    Vec3f diag;
+    if (!m_mapping.jacobian(q, &diag, world_space)) return false;
+    float w;
+    Vec3f p = m_mapping.point(q, &w);
+    if (!m_band_limit) w = 0.f;
+    Vec3f g;
+    float v = m_pattern == Pattern::Fbm ? fbm_grad(m_basis, p, m_fractal, w, &g)
+                                        : turbulence_grad(m_basis, p, m_fractal, w, &g);
+    *grad = g * diag * m_shaping.shape_derivative(v);
+    return true;
+  }
   Color eval_point(const TexturePoint& q) const override {
     float w;
     Vec3f p = m_mapping.point(q, &w);

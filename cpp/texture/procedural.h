@@ -45,6 +45,23 @@ struct ProceduralMapping {
 
   bool needs_position() const { return kind != Kind::UV; }
 
+  /// d(mapped) / d(position) per axis (diagonal): position = p_object, or p_world for the
+  /// world mapping; false for uv (no 3D gradient).
+  bool jacobian(const TexturePoint& q, Vec3f* diag, bool* world_space) const {
+    switch (kind) {
+      case Kind::Object: *diag = scale; *world_space = false; return true;
+      case Kind::World: *diag = scale; *world_space = true; return true;
+      case Kind::Relative: {
+        Vec3f ext = q.object_hi - q.object_lo;
+        auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
+        *diag = Vec3f(scale.x / safe(ext.x), scale.y / safe(ext.y), scale.z / safe(ext.z));
+        *world_space = false;
+        return true;
+      }
+      default: return false;
+    }
+  }
+
   /// Mapped point; `footprint` receives the filter width in mapped units (0 = point sample).
   Vec3f point(const TexturePoint& q, float* footprint) const {
     float smax = std::max(scale.x, std::max(scale.y, scale.z));
@@ -115,6 +132,14 @@ struct ProceduralShaping {
   Color color(float v) const {
     float t = shape(v);
     return ramp.empty() ? Color(t) : ramp.eval(t);
+  }
+  /// d shape / d v (0 where the remap clamps).
+  float shape_derivative(float v) const {
+    float t = (v - lo) / (hi - lo);
+    if (t <= 0.f || t >= 1.f) return 0.f;
+    float d = 1.f / (hi - lo);
+    if (smooth) d *= 6.f * t * (1.f - t);
+    return invert ? -d : d;
   }
 
   /// The linear remap (no smoothstep) averaged over v +- w/2: exact box filtering of the

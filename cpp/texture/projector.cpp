@@ -36,6 +36,7 @@ class ProjectorTexture final : public Texture {
         m_h(height), m_object(object_space), m_mask(mask), m_outside(outside) {}
 
   bool needs_position() const override { return true; }
+  bool needs_uv_footprint() const override { return false; }
 
   /// Projected texture coordinates of point p (in the projector's space); false outside the
   /// frustum. `depth` receives the distance along the projector's axis.

@@ -48,6 +48,15 @@ class Texture {
     float la = axis_a.x * axis_a.x + axis_a.y * axis_a.y, lb = axis_b.x * axis_b.x + axis_b.y * axis_b.y;
     return eval(uv, std::sqrt(std::max(la, lb)));
   }
+  /// Gradient of the first channel at q, for bump mapping without finite differences:
+  /// with respect to p_object (`*world_space` false) or p_world (true). False when the
+  /// texture has no analytic gradient (bump mapping then uses central differences).
+  virtual bool eval_gradient(const TexturePoint& q, Vec3f* grad, bool* world_space) const { return false; }
+  /// True when lookups read the uv footprint (uv_footprint, the uv ellipse): image textures
+  /// and uv-mapped procedural ones. Procedural textures over 3D mappings read only the world
+  /// footprint, which the integrator always provides (cheaply), so the uv ellipse of the ray
+  /// cone is not computed for them.
+  virtual bool needs_uv_footprint() const { return true; }
   /// True when the value does not depend on uv (lets materials skip footprints).
   virtual bool is_constant() const { return false; }
   /// Average value over the texture (used for light power estimates and albedo priors).

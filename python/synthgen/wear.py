@@ -69,8 +69,9 @@ def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale:
          colors: Sequence = RUST_COLORS) -> int:
     """Rust over ``base``: an fBm mask in relative-local coordinates (``scale`` features
     across the object), biased towards the bottom of the object by ``bottom_bias`` (0 = none,
-    1 = strong), covering ``amount`` of it; the rust is a rough principled material with a
-    colour-ramp fBm and an fBm bump of ``bump`` metres."""
+    1 = strong), covering ``amount`` of it; the rust has a colour-ramp fBm and a turbulence
+    bump of ``bump`` metres: Lambertian for ``roughness`` >= 0.8 (the default 0.85), else a
+    principled material of that roughness."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 2.0)
@@ -88,9 +89,15 @@ def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale:
                                              "seed": int(seed) + 1, "remap": [-0.6, 0.6]}, **_ramp(colors)))
     bump_tex = scene.add_texture("noise", {"pattern": "turbulence", "octaves": 3, "mapping": "object", "scale": 40.0,
                                            "seed": int(seed) + 2})
-    wear = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness),
-                                             "metallic": 0.0, "bump_map": TextureRef(bump_tex),
-                                             "bump_scale": float(bump)})
+    if roughness >= 0.8:
+        # Very rough rust: Lambertian (a GGX lobe this rough adds little but costs a principled
+        # evaluation per hit).
+        wear = scene.add_material("diffuse", {"albedo": TextureRef(color), "bump_map": TextureRef(bump_tex),
+                                              "bump_scale": float(bump)})
+    else:
+        wear = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness),
+                                                 "metallic": 0.0, "bump_map": TextureRef(bump_tex),
+                                                 "bump_scale": float(bump)})
     return _mix(scene, base, wear, mask)
 
 

@@ -249,3 +249,58 @@ TEST(noise, plugins_validate_parameters) {
   EXPECT_GT(avg.x, 0.1f);
   EXPECT_LT(avg.x, 0.8f);
 }
+
+// Analytic gradients (bump mapping) against central differences of the values.
+TEST(noise, analytic_gradients_match_finite_differences) {
+  NoiseBasis b(12);
+  Pcg32 rng(13);
+  const float h = 1e-3f;
+  auto fd = [&](auto f, const Vec3f& p) {
+    return Vec3f((f(p + Vec3f(h, 0, 0)) - f(p - Vec3f(h, 0, 0))) / (2 * h),
+                 (f(p + Vec3f(0, h, 0)) - f(p - Vec3f(0, h, 0))) / (2 * h),
+                 (f(p + Vec3f(0, 0, h)) - f(p - Vec3f(0, 0, h))) / (2 * h));
+  };
+  FractalParams fp;
+  fp.octaves = 4;
+  int checked = 0;
+  for (int i = 0; i < 500; ++i) {
+    Vec3f p = random_point(rng, 10.f);
+    Vec3f g;
+    float v = b.perlin_grad(p, &g);
+    if (std::fabs(v) > 0.99f) continue;  // perlin() clamps there
+    Vec3f e = fd([&](const Vec3f& q) { return b.perlin(q); }, p);
+    ASSERT_LT(length(g - e), 2e-2f * std::max(1.f, length(e))) << i;
+    Vec3f gf;
+    fbm_grad(b, p, fp, 0.f, &gf);
+    Vec3f ef = fd([&](const Vec3f& q) { return fbm(b, NoiseKind::Perlin, q, fp); }, p);
+    ASSERT_LT(length(gf - ef), 5e-2f * std::max(1.f, length(ef))) << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 400);
+  // Through a texture with a relative-local mapping and a remap.
+  ParamSet p;
+  p.set("mapping", std::string("relative"));
+  p.set("scale", 3.0);
+  p.set("pattern", std::string("fbm"));
+  p.set("remap", std::vector<double>{-0.8, 0.8});
+  auto t = create_texture("noise", p, "test");
+  int ok = 0;
+  for (int i = 0; i < 300; ++i) {
+    TexturePoint q;
+    q.object_lo = Vec3f(-1.f, 0.f, -2.f);
+    q.object_hi = Vec3f(1.f, 3.f, 2.f);
+    q.p_object = q.object_lo + (q.object_hi - q.object_lo) * Vec3f(rng.next_float(), rng.next_float(), rng.next_float());
+    Vec3f g;
+    bool ws;
+    ASSERT_TRUE(t->eval_gradient(q, &g, &ws));
+    ASSERT_FALSE(ws);
+    Vec3f e = fd([&](const Vec3f& x) {
+      TexturePoint r = q;
+      r.p_object = x;
+      return t->eval_point(r).x;
+    }, q.p_object);
+    // The remap clamps (kinks) at its ends: points next to them may differ.
+    if (length(g - e) < 5e-2f * std::max(1.f, length(e))) ++ok;
+  }
+  EXPECT_GT(ok, 294);
+}
