@@ -234,6 +234,44 @@ void Scene::update_light(uint32_t id, const std::string& type, const ParamSet& p
   m_structure_dirty = true;
 }
 
+namespace {
+bool params_refer_to_texture(const ParamSet& p, uint32_t id) {
+  for (const auto& kv : p.values())
+    if (auto r = std::get_if<TextureRef>(&kv.second))
+      if (r->id == id) return true;
+  return false;
+}
+}  // namespace
+
+void Scene::remove_texture(uint32_t id) {
+  get_slot(m_textures, id, "texture");
+  for (size_t i = 0; i < m_textures.size(); ++i)
+    if (m_textures[i] && i != id && params_refer_to_texture(m_textures[i]->params, id))
+      throw Error("texture " + std::to_string(id) + " is still used by texture " + std::to_string(i));
+  for (size_t i = 0; i < m_materials.size(); ++i)
+    if (m_materials[i] && params_refer_to_texture(m_materials[i]->params, id))
+      throw Error("texture " + std::to_string(id) + " is still used by material " + std::to_string(i));
+  m_textures[id].reset();
+}
+
+void Scene::remove_material(uint32_t id) {
+  get_slot(m_materials, id, "material");
+  for (size_t i = 0; i < m_instances.size(); ++i)
+    if (m_instances[i] && m_instances[i]->material_id == int64_t(id))
+      throw Error("material " + std::to_string(id) + " is still used by instance " + std::to_string(i));
+  for (size_t i = 0; i < m_materials.size(); ++i)
+    if (m_materials[i] && i != id)
+      for (uint32_t d : m_materials[i]->depends_on)
+        if (d == id) throw Error("material " + std::to_string(id) + " is still used by material " + std::to_string(i));
+  for (size_t i = 0; i < m_meshes.size(); ++i)
+    if (m_meshes[i])
+      for (int32_t m : m_meshes[i]->mesh->material_ids)
+        if (m == int32_t(id))
+          throw Error("material " + std::to_string(id) + " is still used by the triangles of mesh " + std::to_string(i));
+  m_materials[id].reset();
+  m_structure_dirty = true;
+}
+
 void Scene::remove_light(uint32_t id) {
   get_slot(m_lights, id, "light");
   m_lights[id].reset();

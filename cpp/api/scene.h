@@ -96,6 +96,12 @@ class Scene {
   uint32_t add_light(const std::string& type, const ParamSet& params);
   void update_light(uint32_t id, const std::string& type, const ParamSet& params);
   void remove_light(uint32_t id);
+  /// Removes a texture / material from the library (its id becomes a hole). Refused while
+  /// another texture or material refers to it (or, for materials, an instance or a mesh's
+  /// per-triangle ids), so a saved scene always replays. Lets long runs that create
+  /// per-frame textures and materials (wear masks, generated plates) keep the library bounded.
+  void remove_texture(uint32_t id);
+  void remove_material(uint32_t id);
 
   // Camera ---------------------------------------------------------------------------
   void set_camera(const PinholeCamera& camera);

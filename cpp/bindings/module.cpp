@@ -383,6 +383,10 @@ a BVH build). render() commits pending edits first.)doc")
            },
            py::arg("light_id"), py::arg("type"), py::arg("params") = py::dict())
       .def("remove_light", &Scene::remove_light, py::arg("light_id"))
+      .def("remove_texture", &Scene::remove_texture, py::arg("texture_id"),
+           "Removes a texture; refused while a texture or material refers to it.")
+      .def("remove_material", &Scene::remove_material, py::arg("material_id"),
+           "Removes a material; refused while an instance, a mesh's triangles or another material use it.")
       .def("set_camera", &Scene::set_camera, py::arg("camera"))
       .def_property_readonly("camera", &Scene::camera)
       .def("commit", &Scene::commit, py::call_guard<py::gil_scoped_release>())

@@ -40,7 +40,7 @@ from . import annotations as A
 from . import primitives as P
 from . import scenario as S
 from . import writers as W
-from ._core import PinholeCamera, Scene, SynthgenError, load_image_plugin
+from ._core import PinholeCamera, Scene, SynthgenError, TextureRef, load_image_plugin
 
 __all__ = ["FrameRenderer", "write_frame", "assemble_coco", "write_yolo_dataset_yaml", "run", "frame_name",
            "completed_frames", "LocalExecutor", "DaskExecutor", "RunSummary"]
@@ -106,6 +106,27 @@ class _Shape:
         self.unit = 1.0  # metres per mesh unit
 
 
+class _Recorder:
+    """A Scene facade that records the ids of the textures and materials added through it
+    (the per-frame resources the frame renderer removes again)."""
+
+    def __init__(self, scene: Scene, textures: List[int], materials: List[int]):
+        self._scene, self._t, self._m = scene, textures, materials
+
+    def add_texture(self, *a: Any, **k: Any) -> int:
+        i = self._scene.add_texture(*a, **k)
+        self._t.append(i)
+        return i
+
+    def add_material(self, *a: Any, **k: Any) -> int:
+        i = self._scene.add_material(*a, **k)
+        self._m.append(i)
+        return i
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._scene, name)
+
+
 class FrameRenderer:
     """Renders frames of one scenario, keeping the scene (meshes and their BVHs, the
     ground, material slots) across frames; per frame only instances, materials, lights
@@ -117,11 +138,18 @@ class FrameRenderer:
         self.scene = Scene()
         self._shapes: Dict[Any, _Shape] = {}
         self._pool: List[int] = []        # instance ids, reused frame after frame
+        self._decor: List[int] = []       # unlabelled instances (sign poles, plate posts), reused too
+        self._frame_textures: List[int] = []   # textures and materials made for one frame (signs,
+        self._frame_materials: List[int] = []  # plates, wear), removed when the next frame is set up
+        import tempfile
+
+        self._tmp = tempfile.mkdtemp(prefix="synthgen-worker-")
         self._instances: List[int] = []   # this frame's objects (a prefix of the pool)
         self._lights: List[int] = []
         self._materials: List[int] = []
         self._ground_instance: Optional[int] = None
         self._ground_material: Optional[int] = None
+        self._pole_material: Optional[int] = None
         g = scenario.spec["ground"]
         if g["enabled"]:
             pl = P.plane(float(g["size"]), float(g["size"]))
@@ -130,12 +158,29 @@ class FrameRenderer:
 
     # -- shapes -----------------------------------------------------------------------
     def _shape(self, obj: Mapping[str, Any]) -> _Shape:
-        if obj.get("asset"):
+        if obj.get("sign") is not None or obj.get("plate") is not None:
+            key = ("panel", "sign" if obj.get("sign") is not None else "plate")
+        elif obj.get("asset"):
             key = ("asset", obj["asset"])
         else:
             key = ("mesh", obj["mesh"]) if obj.get("mesh") else ("primitive", obj["primitive"])
         if key in self._shapes:
             return self._shapes[key]
+        if key[0] == "panel":
+            if key[1] == "sign":
+                # A unit square in the x-y plane facing -z (towards a camera at azimuth 0, whose image
+                # right is world -x): u runs along -x so the pictogram reads correctly from the front.
+                q = np.array([[-0.5, 0, 0], [0.5, 0, 0], [0.5, 1, 0], [-0.5, 1, 0]], np.float32)
+                mid = self.scene.add_mesh(q, np.array([[0, 2, 1], [0, 3, 2]], np.uint32),
+                                          uvs=np.array([[1, 0], [0, 0], [0, 1], [1, 1]], np.float32), name="sign")
+                lo, hi = np.array([-0.5, 0.0, 0.0]), np.array([0.5, 1.0, 0.0])
+            else:
+                b = P.box((1.0, 1.0, 1.0))
+                mid = self.scene.add_mesh(b["positions"], b["indices"], normals=b["normals"], uvs=b["uvs"], name="plate")
+                lo, hi = np.full(3, -0.5), np.full(3, 0.5)
+            shape = _Shape(mid, lo, hi, False)
+            self._shapes[key] = shape
+            return shape
         if key[0] in ("mesh", "asset"):
             unit = 1.0
             path = key[1]
@@ -159,6 +204,18 @@ class FrameRenderer:
     def _object_local(self, obj: Mapping[str, Any], shape: _Shape) -> Tuple[np.ndarray, float, np.ndarray]:
         """(object_from_shape scale/lift matrix, footprint radius, box size in metres)."""
         size = np.asarray(obj["size"], np.float64) * float(obj["scale"])
+        if obj.get("sign") is not None:
+            s = float(obj["sign"]["size"]) * float(obj["scale"])
+            m = np.eye(4)
+            m[:3, :3] = np.diag([s, s, 1.0])
+            m[1, 3] = float(obj["sign"]["mount_height"])
+            return m, 0.5 * s, np.array([s, s + float(obj["sign"]["mount_height"]), 0.02])
+        if obj.get("plate") is not None:
+            w, h = 0.52 * float(obj["scale"]), (0.112 if obj["plate"]["country"] == "ru" else 0.11) * float(obj["scale"])
+            m = np.eye(4)
+            m[:3, :3] = np.diag([w, h, 0.01])
+            m[1, 3] = float(obj["plate"]["mount_height"]) + 0.5 * h
+            return m, 0.5 * w, np.array([w, h + float(obj["plate"]["mount_height"]), 0.01])
         if shape.own_materials:  # meshes keep their proportions: size is a per-axis scale factor
             ext = (shape.hi - shape.lo) * shape.unit  # in metres (manifest `scale`)
             dims = ext * size
@@ -214,6 +271,58 @@ class FrameRenderer:
         self.scene.update_material(mid, t, p)
         return mid
 
+    def _image_texture(self, rec: "_Recorder", name: str, rgb: np.ndarray) -> int:
+        """A generated image as a texture; files are named by content, so the scene's image
+        cache decodes each one once per worker."""
+        import hashlib
+
+        digest = hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest()[:16]
+        path = os.path.join(self._tmp, f"{name}-{digest}.exr")
+        if not os.path.exists(path):
+            W.write_exr(path, rgb)
+        return rec.add_texture("image", {"filename": path, "wrap": "clamp", "colorspace": "linear"})
+
+    def _sign_material(self, rec: "_Recorder", o: Dict[str, Any]) -> int:
+        from . import signs
+
+        sg = o["sign"]
+        s = signs.render_sign(sg["family"], sg.get("text"), 256)
+        o["_sign"] = {"family": s["family"], "text": s["text"], "class_name": s["class_name"]}
+        tex = self._image_texture(rec, "sign", s["rgba"])
+        return rec.add_material("principled", {"base_color": TextureRef(tex), "alpha": TextureRef(tex),
+                                               "alpha_mode": "mask", "roughness": 0.45})
+
+    def _plate_material(self, rec: "_Recorder", o: Dict[str, Any], rng: np.random.Generator) -> int:
+        from . import plates
+
+        reg = plates.random_registration(o["plate"]["country"], rng)
+        p = plates.render_plate(reg, px_per_mm=1.5)
+        o["_plate"] = {"country": reg["country"], "text": reg["text"], "text_latin": p["text_latin"]}
+        col = self._image_texture(rec, "plate", p["rgb"])
+        nrm = self._image_texture(rec, "plate-normal", p["normal"])
+        return rec.add_material("principled", {"base_color": TextureRef(col), "normal_map": TextureRef(nrm),
+                                               "roughness": 0.35, "metallic": 0.0})
+
+    def _apply_wear(self, rec: "_Recorder", mat: int, o: Dict[str, Any], rng: np.random.Generator) -> int:
+        from . import wear
+
+        applied = {}
+        if mat < 0:
+            mat = rec.add_material("diffuse", {"albedo": 0.5})
+        for effect in ("rust", "dirt", "scratches", "ice"):
+            spec = o["wear"].get(effect)
+            if spec is None:
+                continue
+            if float(rng.random()) >= float(spec["probability"]):
+                continue
+            kw = {k: v for k, v in spec.items() if k not in ("probability", "seed") and v is not None}
+            seed = spec.get("seed")
+            kw["seed"] = int(seed) if seed is not None else int(rng.integers(0, 1 << 31))
+            mat = getattr(wear, effect)(rec, mat, **kw)
+            applied[effect] = kw
+        o["_wear"] = applied
+        return mat
+
     def _place(self, objects: List[Dict[str, Any]], rng: np.random.Generator) -> List[Optional[Tuple[float, float]]]:
         """Positions (x, z) on the ground; None where an object found no free spot."""
         pl = self.sc.spec["placement"]
@@ -249,6 +358,8 @@ class FrameRenderer:
                                w + 2 * pw, h + 2 * ph, np.asarray(camera.world_from_camera, np.float64))
         for i, inst in enumerate(self._instances):
             self.scene.set_instance_visible(inst, i == k)
+        for d in self._decor:
+            self.scene.set_instance_visible(d, False)
         if self._ground_instance is not None:
             self.scene.set_instance_visible(self._ground_instance, False)
         r = self._labels(padded)
@@ -259,6 +370,9 @@ class FrameRenderer:
     def _show(self, visible: Sequence[bool]) -> None:
         for inst, v in zip(self._instances, visible):
             self.scene.set_instance_visible(inst, bool(v))
+        for o, v in zip(getattr(self, "_spots_objects", []), visible):
+            if o.get("_decor") is not None:
+                self.scene.set_instance_visible(self._decor[o["_decor"]], bool(v))
         if self._ground_instance is not None:
             self.scene.set_instance_visible(self._ground_instance, True)
 
@@ -283,16 +397,32 @@ class FrameRenderer:
         objects = params["objects"]
         for inst in self._pool[len(objects):]:
             self.scene.set_instance_visible(inst, False)
+            self.scene.set_instance_material(inst, -1)
+        old_textures, old_materials = self._frame_textures, self._frame_materials
+        self._frame_textures, self._frame_materials = [], []
+        rec = _Recorder(self.scene, self._frame_textures, self._frame_materials)
         self._instances = []
+        n_decor = 0
         for k, o in enumerate(objects):
             shape = self._shape(o)
             local, radius, dims = self._object_local(o, shape)
             o["_local"], o["_radius"], o["_dims"] = local, radius, dims
+            obj_rng = S.frame_rng(sc.seed, frame, 100 + k)
             mat = -1
-            if o.get("material") is not None:
+            if o.get("sign") is not None:
+                mat = self._sign_material(rec, o)
+            elif o.get("plate") is not None:
+                mat = self._plate_material(rec, o, obj_rng)
+            elif o.get("material") is not None:
                 mat = self._material(k, o["material"])
             elif not shape.own_materials:
                 mat = self._material(k, {"type": "diffuse", "albedo": (0.5, 0.5, 0.5)})
+            if o.get("wear") is not None:
+                mat = self._apply_wear(rec, mat, o, obj_rng)
+            o["_decor"] = None
+            if o.get("sign") is not None or o.get("plate") is not None:
+                o["_decor"] = n_decor
+                n_decor += 1
             if k < len(self._pool):
                 inst = self._pool[k]
                 self.scene.set_instance_mesh(inst, shape.mesh_id)
@@ -303,6 +433,21 @@ class FrameRenderer:
                                                instance_id=k + 1, material_id=mat)
                 self._pool.append(inst)
             self._instances.append(inst)
+        # Decor (poles, posts): unlabelled instances from their own pool.
+        pole_mesh = self._shape({"primitive": "box"}).mesh_id
+        if self._pole_material is None:
+            self._pole_material = self.scene.add_material("conductor", {"metal": "iron", "roughness": 0.5})
+        while len(self._decor) < n_decor:
+            self._decor.append(self.scene.add_instance(pole_mesh, np.eye(4), class_id=0, instance_id=0,
+                                                       material_id=self._pole_material))
+        for d in self._decor[n_decor:]:
+            self.scene.set_instance_visible(d, False)
+        # The previous frame's generated textures and materials are unused now: remove them
+        # (newest first: mixes before what they mix), so the library stays bounded.
+        for mid in reversed(old_materials):
+            self.scene.remove_material(mid)
+        for tid in reversed(old_textures):
+            self.scene.remove_texture(tid)
         t_update = time.perf_counter()
 
         # Layouts: retry until every placed object meets the visibility criteria.
@@ -316,8 +461,15 @@ class FrameRenderer:
             for k, (o, spot) in enumerate(zip(objects, spots)):
                 if spot is None:
                     continue
-                o["_world"] = P.translate([spot[0], 0.0, spot[1]]) @ _rot_y(o["yaw"]) @ o["_local"]
+                base = P.translate([spot[0], 0.0, spot[1]]) @ _rot_y(o["yaw"])
+                o["_world"] = base @ o["_local"]
                 self.scene.set_instance_transform(self._instances[k], o["_world"].astype(np.float32))
+                if o["_decor"] is not None:
+                    h = float((o.get("sign") or o.get("plate"))["mount_height"])
+                    pole = base @ P.translate([0.0, 0.5 * h, 0.03]) @ P.scale([0.05, max(h, 1e-3), 0.05])
+                    o["_decor_world"] = pole
+                    self.scene.set_instance_transform(self._decor[o["_decor"]], pole.astype(np.float32))
+            self._spots_objects = objects
             self._show([s is not None for s in spots])
             ids = np.asarray(self._labels(camera).instance_id)
             counts = np.bincount(ids.ravel(), minlength=len(objects) + 1)
@@ -386,6 +538,9 @@ class FrameRenderer:
         for k, o in enumerate(objects):
             rec: Dict[str, Any] = {"index": k, "instance_id": k + 1, "class": self.sc.class_names[o["class_index"]],
                                    "class_id": o["class_index"] + 1, "kind": o["kind"]}
+            for key in ("sign", "plate", "wear"):
+                if o.get("_" + key) is not None:
+                    rec[key] = o["_" + key]
             if not keep[k]:
                 rec["dropped"] = dropped.get(k, "no free spot in the placement region")
                 out.append(rec)

@@ -39,7 +39,7 @@ import hashlib
 import json
 import math
 import os
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple  # noqa: F401
 
 import numpy as np
 
@@ -245,6 +245,34 @@ CAMERA = Record(
                     variants={"orbit": ORBIT, "look_at": LOOK_AT}, default=EMPTY)},
     exclusive=[("fov_y",), ("fx", "fy")], requires={"fy": ("fx",)}, default=EMPTY, doc="camera")
 
+def _wear_effect(params: Dict[str, Field]) -> Record:
+    return Record(dict({"probability": Number(1.0, min=0.0, max=1.0, doc="chance that an instance gets the effect"),
+                        "amount": R(Number(0.35, min=0.0, max=1.0, doc="covered fraction")),
+                        "seed": R(Integer(None, min=0, max=(1 << 31) - 1, doc="pattern seed (default: drawn)"))},
+                       **params), default=None)
+
+
+WEAR = Record({
+    "rust": _wear_effect({"scale": R(Number(3.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(0.6, min=0.0, max=2.0)),
+                          "roughness": R(Number(0.85, min=0.0, max=1.0)), "bump": R(Number(0.002, min=0.0, max=0.05))}),
+    "dirt": _wear_effect({"scale": R(Number(5.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(1.0, min=0.0, max=4.0))}),
+    "scratches": _wear_effect({"density": R(Number(8.0, min=0.001, max=10000.0)),
+                               "width": R(Number(0.04, min=0.0001, max=1.0))}),
+    "ice": _wear_effect({"scale": R(Number(4.0, min=0.001, max=1000.0)), "top_bias": R(Number(0.5, min=0.0, max=2.0))}),
+}, default=None, doc="wear effects (synthgen.wear presets), applied in the order rust, dirt, scratches, ice")
+
+SIGN = Record({
+    "family": R(Choice(["prohibitory", "warning", "stop", "give_way", "information"], REQUIRED)),
+    "text": R(String(None, doc="number of a prohibitory sign, symbol of a warning / information sign")),
+    "size": R(Number(0.7, min=0.05, max=5.0, doc="sign width in metres")),
+    "mount_height": R(Number(1.5, min=0.0, max=10.0, doc="height of the sign's lower edge; a pole below it")),
+}, default=None, doc="a road sign: a generated pictogram (alpha cut-out) on a pole")
+
+PLATE = Record({
+    "country": R(Choice(["ru", "de"], REQUIRED)),
+    "mount_height": R(Number(0.6, min=0.0, max=10.0, doc="height of the plate's lower edge; a post below it")),
+}, default=None, doc="a licence plate with a random valid registration (its text goes into the metadata)")
+
 OBJECT = Record(
     {"class": String(REQUIRED, doc="class name (COCO category, YOLO class, KITTI type)"),
      "name": String(None, doc="label for messages and metadata"),
@@ -256,8 +284,11 @@ OBJECT = Record(
                       doc="box size or sphere diameter, metres")),
      "scale": R(Number(1.0, min=0.0, min_open=True, doc="uniform scale of the shape")),
      "yaw": R(Number(0.0, min=-360.0, max=720.0, doc="rotation about +y, degrees")),
-     "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None)},
-    one_of=[("primitive", "mesh", "asset")], doc="an object kind placed on the ground")
+     "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None),
+     "sign": SIGN,
+     "plate": PLATE,
+     "wear": WEAR},
+    one_of=[("primitive", "mesh", "asset", "sign", "plate")], doc="an object kind placed on the ground")
 
 PLACEMENT = Record(
     {"region": Vector(4, (-3.0, -3.0, 3.0, 3.0), doc="[x_min, z_min, x_max, z_max] on the ground, metres"),

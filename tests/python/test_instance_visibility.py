@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import synthgen as sg
 from synthgen import primitives as P
@@ -71,3 +72,37 @@ def test_hidden_emitter_is_not_a_light_and_visibility_survives_save(tmp_path):
     t.commit()
     assert not t.instance_visible(light)
     np.testing.assert_array_equal(t.render(spp=16, max_depth=3, seed=1).rgb, dark.rgb)
+
+
+def test_textures_and_materials_can_be_removed_when_unused(tmp_path):
+    s = sg.Scene()
+    t = s.add_texture("noise", {"mapping": "object"})
+    b = s.add_texture("blend", {"a": sg.TextureRef(t), "b": 0.5, "op": "mix"})
+    base = s.add_material("diffuse", {"albedo": sg.TextureRef(b)})
+    other = s.add_material("diffuse", {"albedo": 0.3})
+    mix = s.add_material("mix", {"material_a": base, "material_b": other, "weight": 0.5})
+    m = s.add_mesh(*(lambda q: (q["positions"], q["indices"]))(P.box((1.0, 1.0, 1.0))))
+    inst = s.add_instance(m, None, material_id=mix)
+    with pytest.raises(ValueError, match="used by texture"):
+        s.remove_texture(t)
+    with pytest.raises(ValueError, match="used by material"):
+        s.remove_texture(b)
+    with pytest.raises(ValueError, match="used by instance"):
+        s.remove_material(mix)
+    with pytest.raises(ValueError, match="used by material"):
+        s.remove_material(base)
+    s.set_instance_material(inst, other)
+    for mid in (mix, base):
+        s.remove_material(mid)
+    for tid in (b, t):
+        s.remove_texture(tid)
+    with pytest.raises(ValueError):
+        s.remove_texture(t)  # already gone
+    s.add_light("environment", {"radiance": 1.0})
+    s.set_camera(sg.PinholeCamera.from_fov(40.0, 16, 16, sg.PinholeCamera.look_at([0, 0, -4], [0, 0, 0], [0, 1, 0])))
+    s.commit()
+    r = s.render(spp=2, seed=1)
+    path = str(tmp_path / "s.xml")
+    s.save(path)
+    t2 = sg.Scene.load(path)
+    np.testing.assert_array_equal(t2.render(spp=2, seed=1).rgb, r.rgb)
