@@ -26,25 +26,35 @@ namespace sg {
 /// stack: no sharing between threads). `tag` 0 is a texture value, 1 a bump gradient.
 struct TextureValueCache {
   static constexpr int k_size = 8;
-  const void* key[k_size] = {};
-  int tag[k_size] = {};
-  Color value[k_size];
-  int next = 0;
-  const Color* find(const void* k, int t) const {
-    for (int i = 0; i < k_size; ++i)
-      if (key[i] == k && tag[i] == t) return &value[i];
-    return nullptr;
+  // NOTE: only `count` and `next` are initialized: a SurfaceInteraction is built per hit, and
+  // zeroing the arrays would cost more than most lookups save.
+  int count = 0, next = 0;
+  const void* key[k_size];
+  int tag[k_size];
+  float value[k_size][3];
+  bool find(const void* k, int t, Color* out) const {
+    for (int i = 0; i < count; ++i)
+      if (key[i] == k && tag[i] == t) {
+        *out = Color(value[i][0], value[i][1], value[i][2]);
+        return true;
+      }
+    return false;
   }
   void put(const void* k, int t, const Color& v) {
-    key[next] = k;
-    tag[next] = t;
-    value[next] = v;
-    next = (next + 1) % k_size;
+    int i;
+    if (count < k_size) {
+      i = count++;
+    } else {
+      i = next;
+      next = (next + 1) % k_size;
+    }
+    key[i] = k;
+    tag[i] = t;
+    value[i][0] = v.x;
+    value[i][1] = v.y;
+    value[i][2] = v.z;
   }
-  void clear() {
-    for (int i = 0; i < k_size; ++i) key[i] = nullptr;
-    next = 0;
-  }
+  void clear() { count = next = 0; }
 };
 
 struct SurfaceInteraction {
@@ -113,7 +123,8 @@ inline Color eval_texture_uncached(const Texture& t, const SurfaceInteraction& s
 
 inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
   if (t.is_constant()) return t.eval(si.uv, 0.f);
-  if (const Color* c = si.tex_cache.find(&t, 0)) return *c;
+  Color c;
+  if (si.tex_cache.find(&t, 0, &c)) return c;
   Color v = eval_texture_uncached(t, si);
   si.tex_cache.put(&t, 0, v);
   return v;

@@ -84,11 +84,10 @@ inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float 
   const char* key = reinterpret_cast<const char*>(&height);
   int tag;
   std::memcpy(&tag, &scale, sizeof(tag));
-  const Color* ns = si->tex_cache.find(key + 1, tag);
-  const Color* dpdu = ns ? si->tex_cache.find(key + 2, tag) : nullptr;
-  if (ns && dpdu) {
-    si->ns = *ns;
-    si->dpdu = *dpdu;
+  Color ns, dpdu;
+  if (si->tex_cache.find(key + 1, tag, &ns) && si->tex_cache.find(key + 2, tag, &dpdu)) {
+    si->ns = ns;
+    si->dpdu = dpdu;
     return;
   }
   apply_bump_map_uncached(si, height, scale);
@@ -98,8 +97,9 @@ inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float 
 
 inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& height, float scale) {
   // The gradient is a function of the point: computed once per hit (tag 1 of the cache).
-  if (const Color* g = si->tex_cache.find(&height, 1)) {
-    apply_tangent_normal(si, Vec3f(-scale * g->x, -scale * g->y, 1.f));
+  Color g;
+  if (si->tex_cache.find(&height, 1, &g)) {
+    apply_tangent_normal(si, Vec3f(-scale * g.x, -scale * g.y, 1.f));
     return;
   }
   if (height.needs_position() && si->world_from_object) {
