@@ -96,11 +96,29 @@ MaterialContext Scene::material_context(std::vector<uint32_t>* depends_on) const
   return ctx;
 }
 
+void Scene::assign_ao(MaterialEntry& e) const {
+  float radius = 0.f;
+  int samples = 0;
+  for (const auto& kv : e.params.values())
+    if (auto r = std::get_if<TextureRef>(&kv.second))
+      if (r->id < m_textures.size() && m_textures[r->id]) {
+        radius = std::max(radius, m_textures[r->id]->object->ao_radius());
+        samples = std::max(samples, m_textures[r->id]->object->ao_samples());
+      }
+  for (uint32_t d : e.depends_on)
+    if (d < m_materials.size() && m_materials[d]) {
+      radius = std::max(radius, m_materials[d]->object->ao_radius());
+      samples = std::max(samples, m_materials[d]->object->ao_samples());
+    }
+  if (radius > 0.f) e.object->set_ao(radius, samples);
+}
+
 uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
   uint32_t id = uint32_t(m_materials.size());
   std::vector<uint32_t> deps;
   auto m = create_material(type, params, material_context(&deps), "material " + std::to_string(id));
   m_materials.emplace_back(MaterialEntry{type, params, m, deps});
+  assign_ao(*m_materials.back());
   m_structure_dirty = true;
   return id;
 }
@@ -119,6 +137,7 @@ void Scene::update_material(uint32_t id, const std::string& type, const ParamSet
   e.type = type;
   e.params = params;
   e.depends_on = deps;
+  assign_ao(e);
   // Re-create the materials built from it (e.g. a "mix" of it), transitively, in id order.
   std::vector<bool> changed(m_materials.size(), false);
   changed[id] = true;
@@ -131,6 +150,7 @@ void Scene::update_material(uint32_t id, const std::string& type, const ParamSet
     std::vector<uint32_t> dd;
     dep.object = create_material(dep.type, dep.params, material_context(&dd), "material " + std::to_string(j));
     dep.depends_on = dd;
+    assign_ao(dep);
     changed[j] = true;
   }
   m_structure_dirty = true;

@@ -168,6 +168,8 @@ class Scene {
   static const T& get_slot(const std::vector<std::optional<T>>& v, uint32_t id, const char* what);
   void check_material_id(int64_t id, const char* context) const;
   MaterialContext material_context(std::vector<uint32_t>* depends_on = nullptr) const;
+  /// Sets a material's ambient-occlusion needs from the textures and materials it refers to.
+  void assign_ao(MaterialEntry& e) const;
   void build_render_scene();
   /// Per mesh slot: 1 when some instance uses it with a material that has alpha (cut-outs).
   std::vector<char> meshes_needing_alpha_test() const;

@@ -69,6 +69,28 @@ struct VertexKeys {
   }
 };
 
+/// Ambient occlusion at a shading point: the fraction of `n` cosine-distributed rays of
+/// length `radius` over the hemisphere of the shading normal (on the side of `wo`) that hit
+/// nothing. Random numbers: unstratified dimensions `dim0`.. of the path's sampler.
+inline float estimate_ao(const RenderScene& sc, const SurfaceInteraction& si, const Vec3f& wo, float radius, int n,
+                         const PixelSampler& sampler, uint32_t dim0) {
+  float side = dot(si.ng, wo) >= 0.f ? 1.f : -1.f;
+  Vec3f nrm = si.ns * side, ng = si.ng * side;
+  Frame f(nrm);
+  int open = 0;
+  for (int j = 0; j < n; ++j) {
+    Vec2f u(sampler.get_independent(dim0 + 2 * uint32_t(j)), sampler.get_independent(dim0 + 2 * uint32_t(j) + 1));
+    Vec3f d = f.to_world(square_to_cosine_hemisphere(u));
+    if (dot(d, ng) <= 0.f) continue;  // below the geometric surface: occluded by it
+    Ray r;
+    r.o = offset_ray_origin(si.p, si.p_error, ng, d);
+    r.d = d;
+    r.t_max = radius;
+    open += !sc.accel->occluded(r);
+  }
+  return float(open) / float(n);
+}
+
 class PathTracer {
  public:
   PathTracer(const RenderScene& scene, const RenderSettings& settings)
@@ -109,6 +131,8 @@ class PathTracer {
       si.world_footprint = surface_footprint(st.cone_width, st.ray.d, si.ng);
     }
     Vec3f wo = -st.ray.d;
+    if (needs & k_needs_ao)
+      si.ao = estimate_ao(sc, si, wo, mat->ao_radius(), mat->ao_samples(), sampler, 0x10000u + st.bounce * 256u);
     bool shadow_requested = false;
 
     // Emission seen by this segment.
@@ -282,6 +306,10 @@ class PathTracer {
     if (m_s.texture_filtering) {
       set_ray_cone_footprint(&si, inst, hit.prim, ray.d, m_pixel_spread * hit.t);
       si.world_footprint = surface_footprint(m_pixel_spread * hit.t, ray.d, si.ng);
+    }
+    if (mat->traits().needs & k_needs_ao) {
+      PixelSampler centre(m_s.seed, uint64_t(y) * sc.camera.width + x, 0, m_s.spp);
+      si.ao = estimate_ao(sc, si, -ray.d, mat->ao_radius(), mat->ao_samples(), centre, 0x20000u);
     }
     size_t i = size_t(y) * film->width + x;
     film->depth[i] = hit.t * z_per_t;

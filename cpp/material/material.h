@@ -80,6 +80,9 @@ struct SurfaceInteraction {
   Vec3f object_lo, object_hi;
   float world_footprint = 0.f;
   float object_per_world = 1.f;
+  /// Ambient occlusion at the point (fraction of unoccluded short rays, 1 = open), computed by
+  /// the integrator when the material needs it (k_needs_ao); 1 otherwise.
+  float ao = 1.f;
   /// The instance transform (3D bump mapping of procedural heights shifts p_object with it).
   const Transform* world_from_object = nullptr;
   /// Texture values evaluated at this point (see TextureValueCache); whoever moves the
@@ -115,6 +118,7 @@ inline Color eval_texture_uncached(const Texture& t, const SurfaceInteraction& s
     q.object_hi = si.object_hi;
     q.world_footprint = si.world_footprint;
     q.object_per_world = si.object_per_world;
+    q.ao = si.ao;
     return t.eval_point(q);
   }
   if (si.uv_axis_a.x != 0.f || si.uv_axis_a.y != 0.f) return t.eval_ellipse(si.uv, si.uv_axis_a, si.uv_axis_b);
@@ -142,6 +146,7 @@ inline float eval_alpha_texture(const Texture& t, const SurfaceInteraction& si) 
 enum MaterialNeeds : uint32_t {
   k_needs_tangent = 1u << 0,    ///< SurfaceInteraction::dpdu (anisotropy, normal maps)
   k_needs_footprint = 1u << 1,  ///< uv footprint (filtered textures)
+  k_needs_ao = 1u << 2,         ///< SurfaceInteraction::ao (an "ao" texture): short occlusion rays
 };
 
 enum BsdfFlags : uint32_t {
@@ -178,6 +183,15 @@ class Material {
   virtual ~Material() = default;
   /// The traits without virtual calls once cache_traits() ran (create_material does).
   Traits traits() const { return m_traits_cached ? m_traits : Traits{flags(), needs(), is_emissive()}; }
+  /// Ambient occlusion wanted by the material's textures ("ao"): the ray length (0 = none)
+  /// and the number of rays. Set by the scene from the textures the material refers to.
+  float ao_radius() const { return m_ao_radius; }
+  int ao_samples() const { return m_ao_samples; }
+  void set_ao(float radius, int samples) {
+    m_ao_radius = radius;
+    m_ao_samples = samples;
+    if (radius > 0.f) m_traits.needs |= k_needs_ao;
+  }
   void cache_traits() {
     m_traits = Traits{flags(), needs(), is_emissive()};
     m_traits_cached = true;
@@ -232,6 +246,8 @@ class Material {
  private:
   Traits m_traits;
   bool m_traits_cached = false;
+  float m_ao_radius = 0.f;
+  int m_ao_samples = 0;
 };
 
 using TextureLookup = std::function<std::shared_ptr<Texture>(uint32_t id)>;

@@ -7,6 +7,8 @@
 // texture (0.5; mix: (1 - f) a + f b; other ops: a op (f b)); shaping only when `remap` or a
 // ramp is given: the first channel is remapped [lo, hi] -> [0, 1] (smooth, invert) and
 // coloured by ramp_positions / ramp_colors (grey without).
+#include <algorithm>
+
 #include "texture/procedural.h"
 #include "texture/texture_registry.h"
 
@@ -43,6 +45,8 @@ class BlendTexture final : public Texture {
   }
 
   bool needs_position() const override { return m_position; }
+  float ao_radius() const override { return std::max({m_a->ao_radius(), m_b->ao_radius(), m_f->ao_radius()}); }
+  int ao_samples() const override { return std::max({m_a->ao_samples(), m_b->ao_samples(), m_f->ao_samples()}); }
   bool needs_uv_footprint() const override {
     return m_a->needs_uv_footprint() || m_b->needs_uv_footprint() || m_f->needs_uv_footprint();
   }

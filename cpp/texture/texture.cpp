@@ -16,11 +16,13 @@ std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet&
   else if (type == "blend") t = create_blend_texture(params, inputs);
   else if (type == "gradient") t = create_gradient_texture(params);
   else if (type == "projector") t = create_projector_texture(params, inputs);
+  else if (type == "ao") t = create_ao_texture(params);
   else {
-    std::string guess = closest_match(type, {"blend", "cellular", "constant", "gradient", "image", "noise", "projector"});
+    std::string guess =
+        closest_match(type, {"ao", "blend", "cellular", "constant", "gradient", "image", "noise", "projector"});
     throw Error(context + ": unknown texture type '" + type + "'" +
                 (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-                "; known types: blend, cellular, constant, gradient, image, noise, projector");
+                "; known types: ao, blend, cellular, constant, gradient, image, noise, projector");
   }
   params.check_unused(context + " (texture '" + type + "')");
   return t;

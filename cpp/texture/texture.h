@@ -25,6 +25,7 @@ struct TexturePoint {
   Vec3f object_lo, object_hi;  ///< object-space bounds of the mesh (relative-local mapping)
   float world_footprint = 0.f; ///< footprint width at the hit in world units (0 = point sample)
   float object_per_world = 1.f; ///< object-space length per world-space length (instance scale)
+  float ao = 1.f;               ///< ambient occlusion at the point ("ao" textures), 1 = open
 };
 
 class Texture {
@@ -52,6 +53,9 @@ class Texture {
   /// with respect to p_object (`*world_space` false) or p_world (true). False when the
   /// texture has no analytic gradient (bump mapping then uses central differences).
   virtual bool eval_gradient(const TexturePoint& q, Vec3f* grad, bool* world_space) const { return false; }
+  /// Ray length and ray count of the ambient occlusion this texture reads (0: none).
+  virtual float ao_radius() const { return 0.f; }
+  virtual int ao_samples() const { return 0; }
   /// True when lookups read the uv footprint (uv_footprint, the uv ellipse): image textures
   /// and uv-mapped procedural ones. Procedural textures over 3D mappings read only the world
   /// footprint, which the integrator always provides (cheaply), so the uv ellipse of the ray

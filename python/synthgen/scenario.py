@@ -255,7 +255,9 @@ def _wear_effect(params: Dict[str, Field]) -> Record:
 WEAR = Record({
     "rust": _wear_effect({"scale": R(Number(3.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(0.6, min=0.0, max=2.0)),
                           "roughness": R(Number(0.85, min=0.0, max=1.0)), "bump": R(Number(0.002, min=0.0, max=0.05))}),
-    "dirt": _wear_effect({"scale": R(Number(5.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(1.0, min=0.0, max=4.0))}),
+    "dirt": _wear_effect({"scale": R(Number(5.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(1.0, min=0.0, max=4.0)),
+                          "ao_radius": R(Number(0.3, min=0.0001, max=100.0, doc="crease search distance, metres")),
+                          "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)"))}),
     "scratches": _wear_effect({"density": R(Number(8.0, min=0.001, max=10000.0)),
                                "width": R(Number(0.04, min=0.0001, max=1.0))}),
     "ice": _wear_effect({"scale": R(Number(4.0, min=0.001, max=1000.0)), "top_bias": R(Number(0.5, min=0.0, max=2.0))}),

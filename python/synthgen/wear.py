@@ -156,19 +156,27 @@ def ice(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.5, scale: f
 
 
 def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: float = 5.0,
-         bottom_bias: float = 1.0, color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95) -> int:
+         bottom_bias: float = 1.0, ao_radius: float = 0.3, ao_weight: float = 1.0,
+         color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95) -> int:
     """Dirt on ``base``: gravity-biased accumulation (more at the bottom, relative-local
-    height, ``bottom_bias``) modulated by fBm (``scale``), covering ``amount``; the dirt is a
-    rough diffuse-like principled material of ``color``. (The ambient-occlusion term of the
-    wear library is not implemented yet: dirt does not yet gather in creases.)"""
+    height, ``bottom_bias``) and ambient-occlusion-driven accumulation (more in creases and
+    corners: 1 - AO from 4 rays of ``ao_radius`` metres at the shading point, weighted by
+    ``ao_weight``), modulated by fBm (``scale``); ``amount`` is the fraction covered in the open
+    (AO 1), creases get more. The dirt is a rough principled material of ``color``."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 4.0)
+    _check("ao_radius", ao_radius, 1e-4, 100.0)
+    ao_weight = _check("ao_weight", ao_weight, 0.0, 4.0)
     noise = scene.add_texture("noise", {"pattern": "fbm", "mapping": "relative", "scale": float(scale),
                                         "seed": int(seed), "remap": [-1.0, 1.0]})
     height = scene.add_texture("gradient", {"axis": "y", "mapping": "relative", "invert": True})
     raw = scene.add_texture("blend", {"a": TextureRef(noise), "b": TextureRef(height), "op": "add",
                                       "factor": bottom_bias * 0.25})
+    if ao_weight > 0.0:
+        occl = scene.add_texture("ao", {"radius": float(ao_radius), "samples": 4, "invert": True})  # 1 - AO
+        raw = scene.add_texture("blend", {"a": TextureRef(raw), "b": TextureRef(occl), "op": "add",
+                                          "factor": ao_weight * 0.5})
     mask = _mask(scene, raw, amount, 0.08)
     wear = scene.add_material("principled", {"base_color": [float(c) for c in color], "roughness": float(roughness)})
     return _mix(scene, base, wear, mask)
