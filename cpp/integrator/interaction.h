@@ -52,8 +52,16 @@ inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const Ray
   si.p_error = Vec3f(inst.error_scale * max_abs + inst.error_offset);
   Vec3f ng_o = cross(p1 - p0, p2 - p0);
   si.ng = normalize(T.apply_normal(ng_o));
+  {
+    float l = length(ng_o);
+    si.n_object = l > 0.f ? ng_o / l : Vec3f(0.f, 0.f, 1.f);
+  }
   if (!m.normals.empty()) {
     Vec3f ns_o = m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2;
+    {
+      float l = length(ns_o);
+      if (l > 0.f && std::isfinite(l)) si.n_object = ns_o / l;
+    }
     Vec3f ns = T.apply_normal(ns_o);
     float l = length(ns);
     if (l > 0.f && std::isfinite(l)) {

@@ -77,6 +77,7 @@ struct SurfaceInteraction {
   /// For procedural textures (TexturePoint): the hit in object space, the mesh's object
   /// bounds, the footprint width in world units and the instance's object-per-world scale.
   Vec3f p_object;
+  Vec3f n_object;  ///< unit (unperturbed) shading normal in object space
   Vec3f object_lo, object_hi;
   float world_footprint = 0.f;
   float object_per_world = 1.f;
@@ -119,6 +120,8 @@ inline Color eval_texture_uncached(const Texture& t, const SurfaceInteraction& s
     q.world_footprint = si.world_footprint;
     q.object_per_world = si.object_per_world;
     q.ao = si.ao;
+    q.n_world = si.ns;
+    q.n_object = si.n_object;
     return t.eval_point(q);
   }
   if (si.uv_axis_a.x != 0.f || si.uv_axis_a.y != 0.f) return t.eval_ellipse(si.uv, si.uv_axis_a, si.uv_axis_b);

@@ -17,12 +17,13 @@ std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet&
   else if (type == "gradient") t = create_gradient_texture(params);
   else if (type == "projector") t = create_projector_texture(params, inputs);
   else if (type == "ao") t = create_ao_texture(params);
+  else if (type == "triplanar") t = create_triplanar_texture(params, inputs);
   else {
-    std::string guess =
-        closest_match(type, {"ao", "blend", "cellular", "constant", "gradient", "image", "noise", "projector"});
+    std::string guess = closest_match(
+        type, {"ao", "blend", "cellular", "constant", "gradient", "image", "noise", "projector", "triplanar"});
     throw Error(context + ": unknown texture type '" + type + "'" +
                 (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-                "; known types: ao, blend, cellular, constant, gradient, image, noise, projector");
+                "; known types: ao, blend, cellular, constant, gradient, image, noise, projector, triplanar");
   }
   params.check_unused(context + " (texture '" + type + "')");
   return t;

@@ -26,6 +26,7 @@ struct TexturePoint {
   float world_footprint = 0.f; ///< footprint width at the hit in world units (0 = point sample)
   float object_per_world = 1.f; ///< object-space length per world-space length (instance scale)
   float ao = 1.f;               ///< ambient occlusion at the point ("ao" textures), 1 = open
+  Vec3f n_world, n_object;      ///< unit shading normal in world and object space (triplanar)
 };
 
 class Texture {

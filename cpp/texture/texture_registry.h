@@ -14,5 +14,6 @@ std::shared_ptr<Texture> create_cellular_texture(const ParamSet& params);
 std::shared_ptr<Texture> create_blend_texture(const ParamSet& params, const TextureInputs& inputs);
 std::shared_ptr<Texture> create_gradient_texture(const ParamSet& params);
 std::shared_ptr<Texture> create_ao_texture(const ParamSet& params);
+std::shared_ptr<Texture> create_triplanar_texture(const ParamSet& params, const TextureInputs& inputs);
 std::shared_ptr<Texture> create_projector_texture(const ParamSet& params, const TextureInputs& inputs);
 }  // namespace sg
