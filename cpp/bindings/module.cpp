@@ -388,7 +388,9 @@ a BVH build). render() commits pending edits first.)doc")
       .def("remove_material", &Scene::remove_material, py::arg("material_id"),
            "Removes a material; refused while an instance, a mesh's triangles or another material use it.")
       .def("set_camera", &Scene::set_camera, py::arg("camera"))
-      .def_property_readonly("camera", &Scene::camera)
+      // A copy: a reference would silently follow later set_camera() calls.
+      .def_property_readonly("camera", [](const Scene& s) { return PinholeCamera(s.camera()); },
+                             "A copy of the current camera.")
       .def("commit", &Scene::commit, py::call_guard<py::gil_scoped_release>())
       .def("has_pending_edits", &Scene::has_pending_edits)
       .def_property_readonly("commit_stats", [](const Scene& s) {

@@ -15,10 +15,14 @@
 //   output             "color": the texture inside the frustum, `outside` elsewhere; "mask":
 //                      1 inside the frustum, 0 outside (a mix weight) ("color")
 //   outside            colour outside the frustum (0)
+//   depth_map          optional occlusion test: a texture holding, for each projected
+//                      pixel, the projector-space depth (z) of the first surface seen from the
+//                      projector (a shadow map, e.g. a label-only render from the projector's
+//                      pose: synthgen.wear.decal makes it); points farther than that by more
+//                      than `depth_bias` (0.01 m + 1%) are occluded: outside the projection
 // Band-limited: the projected texture is looked up with the footprint the surface footprint
 // covers in the projected image.
-// Not done: an occlusion test (surfaces behind others, seen from the projector, are
-// projected onto as well).
+// Without a depth_map, surfaces behind others (seen from the projector) are projected onto too.
 #include <array>
 
 #include "texture/procedural.h"
@@ -31,9 +35,11 @@ namespace {
 class ProjectorTexture final : public Texture {
  public:
   ProjectorTexture(std::shared_ptr<Texture> tex, const Transform& world_from_projector, float fx, float fy, float cx,
-                   float cy, float width, float height, bool object_space, bool mask, const Color& outside)
+                   float cy, float width, float height, bool object_space, bool mask, const Color& outside,
+                   std::shared_ptr<Texture> depth_map, float depth_bias)
       : m_tex(std::move(tex)), m_T(world_from_projector), m_fx(fx), m_fy(fy), m_cx(cx), m_cy(cy), m_w(width),
-        m_h(height), m_object(object_space), m_mask(mask), m_outside(outside) {}
+        m_h(height), m_object(object_space), m_mask(mask), m_outside(outside), m_depth(std::move(depth_map)),
+        m_bias(depth_bias) {}
 
   bool needs_position() const override { return true; }
   bool needs_uv_footprint() const override { return false; }
@@ -47,6 +53,12 @@ class ProjectorTexture final : public Texture {
     if (!(x >= 0.f && x <= m_w && y >= 0.f && y <= m_h)) return false;
     *uv = Vec2f(x / m_w, 1.f - y / m_h);
     *depth = q.z;
+    if (m_depth) {
+      // NOTE: shadow-map test (Williams 1978, "Casting Curved Shadows on Curved Surfaces"),
+      // point-sampled, with a constant plus relative bias against self-occlusion.
+      float d = m_depth->eval(*uv, 0.f).x;
+      if (q.z > d + m_bias + 0.01f * d) return false;
+    }
     return true;
   }
 
@@ -81,6 +93,8 @@ class ProjectorTexture final : public Texture {
   float m_fx, m_fy, m_cx, m_cy, m_w, m_h;
   bool m_object, m_mask;
   Color m_outside;
+  std::shared_ptr<Texture> m_depth;
+  float m_bias;
 };
 
 }  // namespace
@@ -133,8 +147,15 @@ std::shared_ptr<Texture> create_projector_texture(const ParamSet& params, const 
   std::string output = params.get_string("output", "color");
   if (output != "color" && output != "mask") throw Error("parameter 'output': must be color or mask");
   Color outside = params.get_color("outside", Color(0.f));
+  std::shared_ptr<Texture> depth;
+  if (params.get_texture("depth_map", &ref)) {
+    depth = inputs ? inputs(ref.id) : nullptr;
+    if (!depth) throw Error("parameter 'depth_map': texture " + std::to_string(ref.id) + " does not exist");
+  }
+  float bias = params.get_float("depth_bias", 0.01f);
+  if (!(bias >= 0.f)) throw Error("parameter 'depth_bias': must be >= 0");
   return std::make_shared<ProjectorTexture>(std::move(tex), T, fx, fy, cx, cy, w, h, space == "object",
-                                            output == "mask", outside);
+                                            output == "mask", outside, std::move(depth), bias);
 }
 
 }  // namespace sg

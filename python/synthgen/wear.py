@@ -23,7 +23,7 @@ import numpy as np
 
 from ._core import Scene, SynthgenError, TextureRef
 
-__all__ = ["rust", "scratches", "ice", "dirt", "RUST_COLORS"]
+__all__ = ["rust", "scratches", "ice", "dirt", "decal", "RUST_COLORS"]
 
 #: Colour ramp of rust (linear RGB): dark brown to orange (the seed's rust colour map).
 RUST_COLORS = ((0.0, (0.05, 0.02, 0.01)), (0.35, (0.16, 0.05, 0.015)), (0.7, (0.42, 0.14, 0.03)),
@@ -180,3 +180,45 @@ def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: 
     mask = _mask(scene, raw, amount, 0.08)
     wear = scene.add_material("principled", {"base_color": [float(c) for c in color], "roughness": float(roughness)})
     return _mix(scene, base, wear, mask)
+
+
+def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], look_at: Sequence[float],
+          up: Sequence[float] = (0.0, 1.0, 0.0), fov: float = 20.0, aspect: float = 1.0, occlusion: bool = True,
+          depth_resolution: int = 512, roughness: float = 0.4, cache_dir: Optional[str] = None) -> int:
+    """An image (sticker, graffiti, stripes, a plate) projected onto ``base`` by a pinhole
+    projector at ``position`` looking at ``look_at`` (vertical ``fov`` degrees, width/height
+    ``aspect``), for models with no or unusable uvs. Returns a mix of ``base`` and a principled
+    decal material weighted by the projector's frustum mask. With ``occlusion`` the scene as it
+    is now is rendered (depth only) from the projector into a shadow map, so surfaces hidden
+    from the projector stay clean; move nothing in front of the projector afterwards."""
+    import os
+    import tempfile
+
+    from ._core import PinholeCamera
+    from .writers import write_exr
+
+    _check("fov", fov, 0.1, 170.0)
+    _check("aspect", aspect, 1e-3, 1e3)
+    common = {"position": [float(v) for v in position], "look_at": [float(v) for v in look_at],
+              "up": [float(v) for v in up], "fov": float(fov), "width": float(aspect), "height": 1.0}
+    if occlusion:
+        w = max(8, int(round(depth_resolution * aspect))) if aspect >= 1 else int(depth_resolution)
+        h = max(8, int(round(w / aspect)))
+        wfp = PinholeCamera.look_at(common["position"], common["look_at"], common["up"])
+        previous = scene.camera
+        scene.set_camera(PinholeCamera.from_fov(float(fov), w, h, wfp))
+        try:
+            depth = np.asarray(scene.render(spp=1, labels_only=True).depth, np.float32)
+            depth = np.where(np.isfinite(depth), depth, np.float32(1e30))  # nothing seen: never occluded
+        finally:
+            scene.set_camera(previous)
+        d = tempfile.mkdtemp(prefix="synthgen-decal-", dir=cache_dir)
+        path = os.path.join(d, "depth.exr")
+        write_exr(path, depth)
+        dm = scene.add_texture("image", {"filename": path, "colorspace": "linear", "wrap": "clamp"})
+        common["depth_map"] = TextureRef(dm)
+    img = scene.add_texture("image", {"filename": str(image), "wrap": "clamp"})
+    color = scene.add_texture("projector", dict(common, texture=TextureRef(img)))
+    mask = scene.add_texture("projector", dict(common, texture=TextureRef(img), output="mask"))
+    sticker = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness)})
+    return _mix(scene, base, sticker, mask)

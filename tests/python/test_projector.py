@@ -81,3 +81,36 @@ def test_mask_is_zero_outside_the_frustum(tmp_path):
     sel = hit & margin
     assert np.all(mask[sel & inside] == 1.0) and np.all(mask[sel & ~inside] == 0.0)
     assert (hit & inside).sum() > 50 and (hit & ~inside).sum() > 50, "both sides of the frustum are visible"
+
+
+def test_decal_occlusion_keeps_hidden_surfaces_clean(tmp_path):
+    """A small box in front of a big one, as seen from the projector: with the occlusion test
+    the big box stays clean in the small box's "shadow"; without it the decal covers it all."""
+    from synthgen import wear
+
+    path = str(tmp_path / "white.exr")
+    write_image(path, np.ones((8, 8, 3), np.float32))
+
+    def render(occlusion):
+        s = sg.Scene()
+        b = P.box((1.0, 1.0, 1.0))
+        m = s.add_mesh(b["positions"], b["indices"], normals=b["normals"])
+        base = s.add_material("diffuse", {"albedo": 0.1})
+        s.set_camera(sg.PinholeCamera.from_fov(45.0, 64, 64,
+                                               sg.PinholeCamera.look_at((2.5, 0.5, -5.0), (0.0, 0.0, 1.5), (0, 1, 0))))
+        small = s.add_instance(m, P.translate([0.0, 0.0, 0.0]) @ P.scale(0.6), class_id=1, material_id=base)
+        big = s.add_instance(m, P.translate([0.0, 0.0, 3.0]) @ P.scale(2.5), class_id=2, material_id=base)
+        mat = wear.decal(s, base, path, position=[0.0, 0.0, -4.0], look_at=[0.0, 0.0, 3.0], fov=30.0,
+                         occlusion=occlusion, cache_dir=str(tmp_path))
+        s.set_instance_material(small, mat)
+        s.set_instance_material(big, mat)
+        s.add_light("environment", {"radiance": 1.0})
+        r = s.render(spp=1, labels_only=True)
+        alb = np.asarray(r.albedo)[..., 0]
+        return alb[r.class_id == 1], alb[r.class_id == 2]
+
+    s_occ, b_occ = render(True)
+    s_all, b_all = render(False)
+    assert (s_occ > 0.9).mean() > 0.2 and (s_all > 0.9).mean() > 0.2, "the small box carries the decal"
+    assert (b_all > 0.9).mean() > 0.5, "without occlusion the decal covers the big box's face"
+    assert (b_all > 0.9).mean() - (b_occ > 0.9).mean() > 0.03, "with occlusion the shadowed part stays clean"
