@@ -1,8 +1,8 @@
 """The wear gallery: every effect on a road sign, a car body panel and a sphere, one tile each,
 with the effect's parameters printed under it (``synthgen gallery -o docs/gallery.png``).
 
-Columns: clean, rust, dirt, scratches, ice, decal (a licence plate projected onto the object
-with a ``projector`` texture). Rows: a stop sign (pictogram texture with an alpha cut-out on
+Columns: clean, rust, dirt, scratches, ice, and three projected decals (``wear.decal``:
+projective mapping with an occlusion test): hazard stripes, a licence plate, a sign pictogram. Rows: a stop sign (pictogram texture with an alpha cut-out on
 a plate), a bent car body panel (car paint), a sphere (painted metal). Deterministic.
 """
 from __future__ import annotations
@@ -25,7 +25,9 @@ EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
     ("dirt", {"amount": 0.45, "scale": 5, "bottom_bias": 1.5}),
     ("scratches", {"density": 10, "width": 0.05, "amount": 0.7}),
     ("ice", {"amount": 0.5, "scale": 4, "top_bias": 0.8}),
-    ("decal", {"plate": "de"}),
+    ("decal", {"image": "stripes"}),
+    ("plate", {"country": "de"}),
+    ("pictogram", {"family": "prohibitory", "text": "60"}),
 ]
 OBJECTS = ("sign", "panel", "sphere")
 
@@ -78,26 +80,31 @@ def _tile(obj: str, effect: str, params: Dict[str, Any], tmp: str, w: int, h: in
         sp = P.uv_sphere(0.45, 96, 48)
         mesh = s.add_mesh(sp["positions"], sp["indices"], normals=sp["normals"])
         world = P.translate([0.0, 0.45, 0.0])
+    inst = s.add_instance(mesh, world, class_id=1, material_id=base)
+    pose = PinholeCamera.look_at((0.9, 1.0, -2.6), target, (0.0, 1.0, 0.0))
+    s.set_camera(PinholeCamera.from_fov(30.0, w, h, pose))
     mat = base
     if effect in ("rust", "dirt", "scratches", "ice"):
         mat = getattr(wear, effect)(s, base, seed=3, **params)
-    elif effect == "decal":
-        reg = plates.random_registration(params.get("plate", "de"), np.random.default_rng(5))
-        plate = plates.render_plate(reg, px_per_mm=1.0)
-        path = os.path.join(tmp, "plate.exr")
-        write_exr(path, plate["rgb"])
-        img = s.add_texture("image", {"filename": path, "wrap": "clamp", "colorspace": "linear"})
-        aspect = plate["size_mm"][0] / plate["size_mm"][1]
-        common = {"position": [0.0, target[1], -3.0], "look_at": list(target), "fov": 4.2,
-                  "width": aspect, "height": 1.0}
-        proj = s.add_texture("projector", dict(common, texture=TextureRef(img)))
-        mask = s.add_texture("projector", dict(common, texture=TextureRef(img), output="mask"))
-        decal = s.add_material("principled", {"base_color": TextureRef(proj), "roughness": 0.3})
-        mat = s.add_material("mix", {"material_a": base, "material_b": decal, "weight": TextureRef(mask)})
-    s.add_instance(mesh, world, class_id=1, material_id=mat)
+    elif effect in ("decal", "plate", "pictogram"):
+        if effect == "plate":
+            reg = plates.random_registration(params.get("country", "de"), np.random.default_rng(5))
+            img, aspect, fov = plates.render_plate(reg, px_per_mm=1.0)["rgb"], 520.0 / 110.0, 4.2
+        elif effect == "pictogram":
+            sign = signs.render_sign(params["family"], params.get("text"), 128)["rgba"]
+            a = sign[..., 3:4]
+            img, aspect, fov = sign[..., :3] * a + np.float32(0.85) * (1 - a), 1.0, 7.0
+        else:  # hazard stripes
+            y, x = np.mgrid[0:64, 0:256]
+            band = ((x + y) // 16) % 2 == 0
+            img = np.where(band[..., None], np.array([0.8, 0.6, 0.0], np.float32), np.float32(0.02)).astype(np.float32)
+            aspect, fov = 4.0, 3.5
+        path = os.path.join(tmp, f"{effect}.exr")
+        write_exr(path, img)
+        mat = wear.decal(s, base, path, position=[0.0, target[1], -3.0], look_at=list(target), fov=fov,
+                         aspect=aspect, occlusion=True, cache_dir=tmp)
+    s.set_instance_material(inst, mat)
     s.add_light("sky", {"elevation": 35.0, "azimuth": 150.0, "turbidity": 3.0, "strength": 0.02})
-    pose = PinholeCamera.look_at((0.9, 1.0, -2.6), target, (0.0, 1.0, 0.0))
-    s.set_camera(PinholeCamera.from_fov(30.0, w, h, pose))
     return np.asarray(s.render(spp=spp, max_depth=6, seed=1).rgb)
 
 
