@@ -303,6 +303,53 @@ class FrameRenderer:
         return rec.add_material("principled", {"base_color": TextureRef(col), "normal_map": TextureRef(nrm),
                                                "roughness": 0.35, "metallic": 0.0})
 
+    def _apply_decals(self, rec: "_Recorder", mat: int, o: Dict[str, Any], shape: "_Shape",
+                      rng: np.random.Generator) -> int:
+        """Projects each decal onto the object's front (-z) from a projector in object space."""
+        from . import plates, signs, wear
+
+        if mat < 0:
+            mat = rec.add_material("diffuse", {"albedo": 0.5})
+        lo, hi = np.asarray(shape.lo, np.float64), np.asarray(shape.hi, np.float64)
+        ext = np.maximum(hi - lo, 1e-6)
+        centre = 0.5 * (lo + hi)
+        done = []
+        for d in o["decals"]:
+            if float(rng.random()) >= float(d["probability"]):
+                continue
+            if d.get("plate") is not None:
+                reg = plates.random_registration(d["plate"]["country"], rng)
+                img, aspect = plates.render_plate(reg, px_per_mm=1.0)["rgb"], 520.0 / 110.0
+                info = {"kind": "plate", "country": reg["country"], "text": reg["text"]}
+                path = None
+            elif d.get("pictogram") is not None:
+                sg_ = signs.render_sign(d["pictogram"]["family"], d["pictogram"].get("text"), 128)
+                a = sg_["rgba"][..., 3:4]
+                img, aspect = sg_["rgba"][..., :3] * a + np.float32(0.85) * (1 - a), 1.0
+                info = {"kind": "pictogram", "class_name": sg_["class_name"]}
+                path = None
+            else:
+                img, aspect, path = None, 1.0, d["image"]
+                info = {"kind": "image", "file": os.path.basename(d["image"])}
+            if path is None:
+                import hashlib
+
+                digest = hashlib.sha1(np.ascontiguousarray(img).tobytes()).hexdigest()[:16]
+                path = os.path.join(self._tmp, f"decal-{digest}.exr")
+                if not os.path.exists(path):
+                    W.write_exr(path, img.astype(np.float32))
+            width = float(d["size"]) * float(ext[0])
+            cy = float(lo[1] + float(d["height"]) * ext[1])
+            dist = 2.0 * float(ext.max()) + 1e-3
+            target = [float(centre[0]), cy, float(centre[2])]
+            position = [float(centre[0]), cy, float(lo[2]) - dist]
+            fov = float(np.degrees(2.0 * np.arctan(0.5 * width / aspect / (dist + 0.5 * ext[2]))))
+            mat = wear.decal(rec, mat, path, position=position, look_at=target, fov=max(fov, 0.1), aspect=aspect,
+                             occlusion=False, space="object")
+            done.append(info)
+        o["_decals"] = done
+        return mat
+
     def _apply_wear(self, rec: "_Recorder", mat: int, o: Dict[str, Any], rng: np.random.Generator) -> int:
         from . import wear
 
@@ -417,6 +464,8 @@ class FrameRenderer:
                 mat = self._material(k, o["material"])
             elif not shape.own_materials:
                 mat = self._material(k, {"type": "diffuse", "albedo": (0.5, 0.5, 0.5)})
+            if o.get("decals"):
+                mat = self._apply_decals(rec, mat, o, shape, obj_rng)
             if o.get("wear") is not None:
                 mat = self._apply_wear(rec, mat, o, obj_rng)
             o["_decor"] = None
@@ -538,7 +587,7 @@ class FrameRenderer:
         for k, o in enumerate(objects):
             rec: Dict[str, Any] = {"index": k, "instance_id": k + 1, "class": self.sc.class_names[o["class_index"]],
                                    "class_id": o["class_index"] + 1, "kind": o["kind"]}
-            for key in ("sign", "plate", "wear"):
+            for key in ("sign", "plate", "wear", "decals"):
                 if o.get("_" + key) is not None:
                     rec[key] = o["_" + key]
             if not keep[k]:

@@ -275,6 +275,16 @@ PLATE = Record({
     "mount_height": R(Number(0.6, min=0.0, max=10.0, doc="height of the plate's lower edge; a post below it")),
 }, default=None, doc="a licence plate with a random valid registration (its text goes into the metadata)")
 
+DECAL = Record({
+    "image": FilePath(None, doc="an image file (PNG with alpha, JPEG, EXR)"),
+    "pictogram": Record({"family": R(Choice(["prohibitory", "warning", "stop", "give_way", "information"], REQUIRED)),
+                         "text": R(String(None))}, default=None, doc="a generated sign pictogram"),
+    "plate": Record({"country": R(Choice(["ru", "de"], REQUIRED))}, default=None, doc="a generated licence plate"),
+    "probability": Number(1.0, min=0.0, max=1.0, doc="chance that an instance gets the decal"),
+    "size": R(Number(0.4, min=0.01, max=1.0, doc="decal width as a fraction of the object's width")),
+    "height": R(Number(0.5, min=0.0, max=1.0, doc="decal centre height, fraction of the object's height")),
+}, one_of=[("image", "pictogram", "plate")], doc="an image projected onto the object's front (-z side)")
+
 OBJECT = Record(
     {"class": String(REQUIRED, doc="class name (COCO category, YOLO class, KITTI type)"),
      "name": String(None, doc="label for messages and metadata"),
@@ -289,7 +299,8 @@ OBJECT = Record(
      "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None),
      "sign": SIGN,
      "plate": PLATE,
-     "wear": WEAR},
+     "wear": WEAR,
+     "decals": ListOf(DECAL, [], doc="decals projected onto the front, before wear")},
     one_of=[("primitive", "mesh", "asset", "sign", "plate")], doc="an object kind placed on the ground")
 
 PLACEMENT = Record(

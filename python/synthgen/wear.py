@@ -184,13 +184,20 @@ def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: 
 
 def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], look_at: Sequence[float],
           up: Sequence[float] = (0.0, 1.0, 0.0), fov: float = 20.0, aspect: float = 1.0, occlusion: bool = True,
-          depth_resolution: int = 512, roughness: float = 0.4, cache_dir: Optional[str] = None) -> int:
+          depth_resolution: int = 512, roughness: float = 0.4, cache_dir: Optional[str] = None,
+          space: str = "world") -> int:
     """An image (sticker, graffiti, stripes, a plate) projected onto ``base`` by a pinhole
     projector at ``position`` looking at ``look_at`` (vertical ``fov`` degrees, width/height
     ``aspect``), for models with no or unusable uvs. Returns a mix of ``base`` and a principled
     decal material weighted by the projector's frustum mask. With ``occlusion`` the scene as it
     is now is rendered (depth only) from the projector into a shadow map, so surfaces hidden
-    from the projector stay clean; move nothing in front of the projector afterwards."""
+    from the projector stay clean; move nothing in front of the projector afterwards.
+    ``space="object"`` puts the projector in the object space of the instances using the
+    material (it moves with them; no occlusion test then)."""
+    if space not in ("world", "object"):
+        raise SynthgenError(f"wear: 'space' must be world or object, got {space!r}")
+    if space == "object":
+        occlusion = False
     import os
     import tempfile
 
@@ -200,7 +207,8 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
     _check("fov", fov, 0.1, 170.0)
     _check("aspect", aspect, 1e-3, 1e3)
     common = {"position": [float(v) for v in position], "look_at": [float(v) for v in look_at],
-              "up": [float(v) for v in up], "fov": float(fov), "width": float(aspect), "height": 1.0}
+              "up": [float(v) for v in up], "fov": float(fov), "width": float(aspect), "height": 1.0,
+              "space": space}
     if occlusion:
         w = max(8, int(round(depth_resolution * aspect))) if aspect >= 1 else int(depth_resolution)
         h = max(8, int(round(w / aspect)))
