@@ -172,9 +172,12 @@ inline float basis_noise(const NoiseBasis& b, NoiseKind kind, const Vec3f& p) {
   return kind == NoiseKind::Perlin ? b.perlin(p) : b.value(p);
 }
 
-template <bool kAbs>
-float fractal(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint) {
+/// The fractal sum (fbm, or turbulence with kAbs), and with kGrad its gradient (Perlin basis).
+template <bool kAbs, bool kGrad>
+float fractal(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint,
+              Vec3f* grad = nullptr) {
   float s = 1.f, w = 1.f, sum = 0.f, wsum = 0.f;
+  Vec3f g(0.f);
   const float wmul = f.weight_ratio();
   const float mean = kAbs ? mean_abs_noise(kind) : 0.f;
   for (int i = 0; i < f.octaves; ++i) {
@@ -182,68 +185,50 @@ float fractal(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Fractal
     if (a > 0.f) {
       // Decorrelate octaves with a fixed offset per octave (integer lattices would line up).
       Vec3f q = p * s + Vec3f(17.3f, -41.7f, 29.1f) * float(i);
-      float n = basis_noise(b, kind, q);
-      sum += w * (a * (kAbs ? std::fabs(n) : n) + (1.f - a) * mean);
+      if constexpr (kGrad) {
+        Vec3f gn;
+        float n = b.perlin_grad(q, &gn);
+        if (kAbs && n < 0.f) {
+          n = -n;
+          gn = -gn;
+        }
+        sum += w * (a * n + (1.f - a) * mean);
+        g += gn * (w * a * s);
+      } else {
+        float n = basis_noise(b, kind, q);
+        sum += w * (a * (kAbs ? std::fabs(n) : n) + (1.f - a) * mean);
+      }
     } else {
       sum += w * mean;
     }
     wsum += w;
     s *= f.lacunarity;
     w *= wmul;
+  }
+  if constexpr (kGrad) {
+    float norm = (f.normalize && wsum > 0.f) ? 1.f / wsum : 1.f;
+    *grad = g * norm;
+    return sum * norm;
   }
   return (f.normalize && wsum > 0.f) ? sum / wsum : sum;
 }
 
 }  // namespace
 
-namespace {
-
-template <bool kAbs>
-float fractal_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad) {
-  float s = 1.f, w = 1.f, sum = 0.f, wsum = 0.f;
-  Vec3f g(0.f);
-  const float wmul = f.weight_ratio();
-  const float mean = kAbs ? mean_abs_noise(NoiseKind::Perlin) : 0.f;
-  for (int i = 0; i < f.octaves; ++i) {
-    float a = octave_fade(s, footprint);
-    if (a > 0.f) {
-      Vec3f q = p * s + Vec3f(17.3f, -41.7f, 29.1f) * float(i);
-      Vec3f gn;
-      float n = b.perlin_grad(q, &gn);
-      if (kAbs && n < 0.f) {
-        n = -n;
-        gn = -gn;
-      }
-      sum += w * (a * n + (1.f - a) * mean);
-      g += gn * (w * a * s);
-    } else {
-      sum += w * mean;
-    }
-    wsum += w;
-    s *= f.lacunarity;
-    w *= wmul;
-  }
-  float norm = (f.normalize && wsum > 0.f) ? 1.f / wsum : 1.f;
-  *grad = g * norm;
-  return sum * norm;
-}
-
-}  // namespace
-
 float fbm_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad) {
-  return fractal_grad<false>(b, p, f, footprint, grad);
+  return fractal<false, true>(b, NoiseKind::Perlin, p, f, footprint, grad);
 }
 
 float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad) {
-  return fractal_grad<true>(b, p, f, footprint, grad);
+  return fractal<true, true>(b, NoiseKind::Perlin, p, f, footprint, grad);
 }
 
 float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint) {
-  return fractal<false>(b, kind, p, f, footprint);
+  return fractal<false, false>(b, kind, p, f, footprint);
 }
 
 float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint) {
-  return fractal<true>(b, kind, p, f, footprint);
+  return fractal<true, false>(b, kind, p, f, footprint);
 }
 
 CellularResult cellular(const NoiseBasis& b, const Vec3f& p, float jitter, bool want_edge) {

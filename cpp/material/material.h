@@ -106,24 +106,27 @@ struct SurfaceInteraction {
 /// Texture lookup at an interaction, filtered over its footprint: anisotropically when the
 /// integrator provided the footprint ellipse, else isotropically over `uv_footprint`.
 /// Materials should look textures up through this rather than Texture::eval.
+/// Everything a texture may read at an interaction.
+inline TexturePoint texture_point(const SurfaceInteraction& si) {
+  TexturePoint q;
+  q.uv = si.uv;
+  q.uv_footprint = si.uv_footprint;
+  q.uv_axis_a = si.uv_axis_a;
+  q.uv_axis_b = si.uv_axis_b;
+  q.p_world = si.p;
+  q.p_object = si.p_object;
+  q.object_lo = si.object_lo;
+  q.object_hi = si.object_hi;
+  q.world_footprint = si.world_footprint;
+  q.object_per_world = si.object_per_world;
+  q.ao = si.ao;
+  q.n_world = si.ns;
+  q.n_object = si.n_object;
+  return q;
+}
+
 inline Color eval_texture_uncached(const Texture& t, const SurfaceInteraction& si) {
-  if (t.needs_position()) {
-    TexturePoint q;
-    q.uv = si.uv;
-    q.uv_footprint = si.uv_footprint;
-    q.uv_axis_a = si.uv_axis_a;
-    q.uv_axis_b = si.uv_axis_b;
-    q.p_world = si.p;
-    q.p_object = si.p_object;
-    q.object_lo = si.object_lo;
-    q.object_hi = si.object_hi;
-    q.world_footprint = si.world_footprint;
-    q.object_per_world = si.object_per_world;
-    q.ao = si.ao;
-    q.n_world = si.ns;
-    q.n_object = si.n_object;
-    return t.eval_point(q);
-  }
+  if (t.needs_position()) return t.eval_point(texture_point(si));
   if (si.uv_axis_a.x != 0.f || si.uv_axis_a.y != 0.f) return t.eval_ellipse(si.uv, si.uv_axis_a, si.uv_axis_b);
   return t.eval(si.uv, si.uv_footprint);
 }

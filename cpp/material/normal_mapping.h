@@ -104,18 +104,9 @@ inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& heigh
   }
   if (height.needs_position() && si->world_from_object) {
     // Analytic gradient when the texture has one (procedural noise): one evaluation.
-    TexturePoint tq;
-    tq.uv = si->uv;
-    tq.uv_footprint = si->uv_footprint;
-    tq.p_world = si->p;
-    tq.p_object = si->p_object;
-    tq.object_lo = si->object_lo;
-    tq.object_hi = si->object_hi;
-    tq.world_footprint = si->world_footprint;
-    tq.object_per_world = si->object_per_world;
     Vec3f g;
     bool world_space;
-    if (height.eval_gradient(tq, &g, &world_space)) {
+    if (height.eval_gradient(texture_point(*si), &g, &world_space)) {
       Frame f = si->shading_frame();
       auto along = [&](const Vec3f& dir) {
         return dot(g, world_space ? dir : si->world_from_object->apply_inverse_vector(dir));

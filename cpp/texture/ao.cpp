@@ -13,7 +13,7 @@ namespace sg {
 
 namespace {
 
-class AoTexture final : public Texture {
+class AoTexture final : public PointTexture {
  public:
   AoTexture(float radius, int samples, ProceduralShaping shaping)
       : m_radius(radius), m_samples(samples), m_shaping(std::move(shaping)) {
@@ -24,7 +24,6 @@ class AoTexture final : public Texture {
   float ao_radius() const override { return m_radius; }
   int ao_samples() const override { return m_samples; }
   Color eval_point(const TexturePoint& q) const override { return m_shaping.color(q.ao); }
-  Color eval(const Vec2f&, float) const override { return m_shaping.color(1.f); }
   Color average() const override { return m_average; }
 
  private:

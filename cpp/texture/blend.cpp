@@ -18,7 +18,7 @@ namespace {
 
 enum class BlendOp { Mix, Add, Subtract, Multiply, Min, Max, Screen, Difference };
 
-class BlendTexture final : public Texture {
+class BlendTexture final : public PointTexture {
  public:
   BlendTexture(std::shared_ptr<Texture> a, std::shared_ptr<Texture> b, std::shared_ptr<Texture> f, BlendOp op,
                bool shape, ProceduralShaping shaping)
@@ -52,12 +52,6 @@ class BlendTexture final : public Texture {
   }
   Color eval_point(const TexturePoint& q) const override {
     return combine(m_a->eval_point(q), m_b->eval_point(q), m_f->eval_point(q).x);
-  }
-  Color eval(const Vec2f& uv, float footprint) const override {
-    TexturePoint q;
-    q.uv = uv;
-    q.uv_footprint = footprint;
-    return eval_point(q);
   }
   bool is_constant() const override { return m_a->is_constant() && m_b->is_constant() && m_f->is_constant(); }
   Color average() const override { return m_average; }

@@ -13,7 +13,7 @@ namespace sg {
 
 namespace {
 
-class CellularTexture final : public Texture {
+class CellularTexture final : public PointTexture {
  public:
   enum class Output { F1, F2, F2MinusF1, Edge, Cell };
 
@@ -21,19 +21,7 @@ class CellularTexture final : public Texture {
                   bool band_limit)
       : m_output(output), m_jitter(jitter), m_basis(seed), m_mapping(mapping), m_shaping(std::move(shaping)),
         m_band_limit(band_limit) {
-    m_mean = 0.f;
-    for (int i = 0; i < 512; ++i) {
-      auto radical = [](int i, int b) {
-        float f = 1.f, r = 0.f;
-        for (; i > 0; i /= b) {
-          f /= float(b);
-          r += f * float(i % b);
-        }
-        return r;
-      };
-      m_mean += raw(Vec3f(radical(i + 1, 2), radical(i + 1, 3), radical(i + 1, 5)) * 16.f);
-    }
-    m_mean /= 512.f;
+    m_mean = estimate_average([&](const Vec3f& p) { return Color(raw(p)); }).x;
     m_average = estimate_average([&](const Vec3f& p) { return m_shaping.color(raw(p)); });
   }
 
@@ -68,12 +56,6 @@ class CellularTexture final : public Texture {
     if (a <= 0.f) return m_average;
     float rate = m_output == Output::F2MinusF1 ? 2.f : 1.f;
     return m_shaping.color_box(raw(p), rate * w) * a + m_average * (1.f - a);
-  }
-  Color eval(const Vec2f& uv, float footprint) const override {
-    TexturePoint q;
-    q.uv = uv;
-    q.uv_footprint = footprint;
-    return eval_point(q);
   }
   Color average() const override { return m_average; }
 

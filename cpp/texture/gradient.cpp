@@ -12,7 +12,7 @@ namespace sg {
 
 namespace {
 
-class GradientTexture final : public Texture {
+class GradientTexture final : public PointTexture {
  public:
   GradientTexture(int axis, ProceduralMapping mapping, ProceduralShaping shaping)
       : m_axis(axis), m_mapping(mapping), m_shaping(std::move(shaping)) {
@@ -27,12 +27,6 @@ class GradientTexture final : public Texture {
     float w;
     Vec3f p = m_mapping.point(q, &w);
     return m_shaping.color(p[m_axis]);
-  }
-  Color eval(const Vec2f& uv, float footprint) const override {
-    TexturePoint q;
-    q.uv = uv;
-    q.uv_footprint = footprint;
-    return eval_point(q);
   }
   Color average() const override { return m_average; }
 

@@ -14,7 +14,7 @@ namespace sg {
 
 namespace {
 
-class NoiseTexture final : public Texture {
+class NoiseTexture final : public PointTexture {
  public:
   enum class Pattern { Plain, Fbm, Turbulence };
 
@@ -63,12 +63,6 @@ class NoiseTexture final : public Texture {
     float w;
     Vec3f p = m_mapping.point(q, &w);
     return m_shaping.color(value(p, w));
-  }
-  Color eval(const Vec2f& uv, float footprint) const override {
-    TexturePoint q;
-    q.uv = uv;
-    q.uv_footprint = footprint;
-    return eval_point(q);
   }
   Color average() const override { return m_average; }
 

@@ -32,7 +32,7 @@ namespace sg {
 
 namespace {
 
-class ProjectorTexture final : public Texture {
+class ProjectorTexture final : public PointTexture {
  public:
   ProjectorTexture(std::shared_ptr<Texture> tex, const Transform& world_from_projector, float fx, float fy, float cx,
                    float cy, float width, float height, bool object_space, bool mask, const Color& outside,
@@ -76,12 +76,6 @@ class ProjectorTexture final : public Texture {
     t.uv = uv;
     t.uv_footprint = f * std::max(m_fx / m_w, m_fy / m_h) / z;
     return m_tex->eval_point(t);
-  }
-  Color eval(const Vec2f& uv, float footprint) const override {
-    TexturePoint q;
-    q.uv = uv;
-    q.uv_footprint = footprint;
-    return eval_point(q);
   }
   bool has_alpha_channel() const override { return true; }
   float eval_alpha(const Vec2f&, float) const override { return 1.f; }

@@ -72,6 +72,19 @@ class Texture {
   virtual float eval_alpha(const Vec2f& uv, float footprint = 0.f) const { return 1.f; }
 };
 
+/// Base of the textures defined on a TexturePoint (procedural and composite ones): a plain
+/// uv lookup is eval_point at that uv with every other field at its default.
+class PointTexture : public Texture {
+ public:
+  Color eval_point(const TexturePoint& q) const override = 0;
+  Color eval(const Vec2f& uv, float footprint) const final {
+    TexturePoint q;
+    q.uv = uv;
+    q.uv_footprint = footprint;
+    return eval_point(q);
+  }
+};
+
 class ImageCache;
 /// Texture library lookup for textures built from other textures ("blend"); null when absent.
 using TextureInputs = std::function<std::shared_ptr<Texture>(uint32_t id)>;

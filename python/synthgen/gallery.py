@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import os
 import tempfile
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
 
 from . import plates, primitives as P, raster as R, signs, wear
 from ._core import PinholeCamera, Scene, TextureRef
-from .writers import to_srgb8, write_exr
+from .writers import write_exr
 
 __all__ = ["EFFECTS", "OBJECTS", "render_gallery"]
 
@@ -91,9 +91,8 @@ def _tile(obj: str, effect: str, params: Dict[str, Any], tmp: str, w: int, h: in
             reg = plates.random_registration(params.get("country", "de"), np.random.default_rng(5))
             img, aspect, fov = plates.render_plate(reg, px_per_mm=1.0)["rgb"], 520.0 / 110.0, 4.2
         elif effect == "pictogram":
-            sign = signs.render_sign(params["family"], params.get("text"), 128)["rgba"]
-            a = sign[..., 3:4]
-            img, aspect, fov = sign[..., :3] * a + np.float32(0.85) * (1 - a), 1.0, 7.0
+            img, aspect, fov = signs.on_background(signs.render_sign(params["family"], params.get("text"), 128)["rgba"]), \
+                1.0, 7.0
         else:  # hazard stripes
             y, x = np.mgrid[0:64, 0:256]
             band = ((x + y) // 16) % 2 == 0

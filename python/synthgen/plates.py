@@ -17,7 +17,7 @@ pixel box, for OCR datasets. Russian letters are drawn with their Latin look-ali
 from __future__ import annotations
 
 import re
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Tuple
 
 import numpy as np
 

@@ -6,7 +6,7 @@ DejaVu fonts (Debian fonts-dejavu-core), alpha compositing. Pure functions on nu
 from __future__ import annotations
 
 import os
-from typing import Optional, Sequence, Tuple
+from typing import Sequence, Tuple
 
 import numpy as np
 

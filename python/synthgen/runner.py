@@ -28,7 +28,6 @@ import glob
 import math
 import os
 import signal
-import sys
 import time
 import traceback
 from collections.abc import Mapping
@@ -271,16 +270,21 @@ class FrameRenderer:
         self.scene.update_material(mid, t, p)
         return mid
 
-    def _image_texture(self, rec: "_Recorder", name: str, rgb: np.ndarray) -> int:
-        """A generated image as a texture; files are named by content, so the scene's image
-        cache decodes each one once per worker."""
+    def _generated_image(self, name: str, img: np.ndarray) -> str:
+        """Path of a generated image in the worker's directory; files are named by content, so
+        the scene's image cache decodes each one once per worker."""
         import hashlib
 
-        digest = hashlib.sha1(np.ascontiguousarray(rgb).tobytes()).hexdigest()[:16]
+        digest = hashlib.sha1(np.ascontiguousarray(img).tobytes()).hexdigest()[:16]
         path = os.path.join(self._tmp, f"{name}-{digest}.exr")
         if not os.path.exists(path):
-            W.write_exr(path, rgb)
-        return rec.add_texture("image", {"filename": path, "wrap": "clamp", "colorspace": "linear"})
+            W.write_exr(path, np.asarray(img, np.float32))
+        return path
+
+    def _image_texture(self, rec: "_Recorder", name: str, rgb: np.ndarray) -> int:
+        """A generated image as a texture (see _generated_image)."""
+        return rec.add_texture("image", {"filename": self._generated_image(name, rgb), "wrap": "clamp",
+                                         "colorspace": "linear"})
 
     def _sign_material(self, rec: "_Recorder", o: Dict[str, Any]) -> int:
         from . import signs
@@ -324,20 +328,14 @@ class FrameRenderer:
                 path = None
             elif d.get("pictogram") is not None:
                 sg_ = signs.render_sign(d["pictogram"]["family"], d["pictogram"].get("text"), 128)
-                a = sg_["rgba"][..., 3:4]
-                img, aspect = sg_["rgba"][..., :3] * a + np.float32(0.85) * (1 - a), 1.0
+                img, aspect = signs.on_background(sg_["rgba"]), 1.0
                 info = {"kind": "pictogram", "class_name": sg_["class_name"]}
                 path = None
             else:
                 img, aspect, path = None, 1.0, d["image"]
                 info = {"kind": "image", "file": os.path.basename(d["image"])}
             if path is None:
-                import hashlib
-
-                digest = hashlib.sha1(np.ascontiguousarray(img).tobytes()).hexdigest()[:16]
-                path = os.path.join(self._tmp, f"decal-{digest}.exr")
-                if not os.path.exists(path):
-                    W.write_exr(path, img.astype(np.float32))
+                path = self._generated_image("decal", img)
             width = float(d["size"]) * float(ext[0])
             cy = float(lo[1] + float(d["height"]) * ext[1])
             dist = 2.0 * float(ext.max()) + 1e-3
@@ -414,10 +412,11 @@ class FrameRenderer:
         inside = int(mask[ph:ph + h, pw:pw + w].sum())
         return inside, int(mask.sum())
 
-    def _show(self, visible: Sequence[bool]) -> None:
+    def _show(self, objects: Sequence[Dict[str, Any]], visible: Sequence[bool]) -> None:
+        """Shows the frame's objects (and their poles) where `visible`, hides the others."""
         for inst, v in zip(self._instances, visible):
             self.scene.set_instance_visible(inst, bool(v))
-        for o, v in zip(getattr(self, "_spots_objects", []), visible):
+        for o, v in zip(objects, visible):
             if o.get("_decor") is not None:
                 self.scene.set_instance_visible(self._decor[o["_decor"]], bool(v))
         if self._ground_instance is not None:
@@ -518,8 +517,7 @@ class FrameRenderer:
                     pole = base @ P.translate([0.0, 0.5 * h, 0.03]) @ P.scale([0.05, max(h, 1e-3), 0.05])
                     o["_decor_world"] = pole
                     self.scene.set_instance_transform(self._decor[o["_decor"]], pole.astype(np.float32))
-            self._spots_objects = objects
-            self._show([s is not None for s in spots])
+            self._show(objects, [s is not None for s in spots])
             ids = np.asarray(self._labels(camera).instance_id)
             counts = np.bincount(ids.ravel(), minlength=len(objects) + 1)
             fails = []
@@ -536,7 +534,7 @@ class FrameRenderer:
                         fails.append((k, f"visible fraction {frac:.3f} < {pl['min_visible_fraction']}"))
                     elif frac > pl["max_visible_fraction"]:
                         fails.append((k, f"visible fraction {frac:.3f} > {pl['max_visible_fraction']}"))
-                self._show([s is not None for s in spots])
+                self._show(objects, [s is not None for s in spots])
             if best is None or len(fails) < len(best[1]):
                 best = (spots, fails, [o.get("_world") for o in objects])
             if not fails:
@@ -555,7 +553,7 @@ class FrameRenderer:
         for k in range(len(objects)):
             if keep[k]:
                 amodal[k] = self._amodal(camera, k)
-        self._show(keep)
+        self._show(objects, keep)
         self.scene.set_camera(camera)
         self.scene.commit()
         rs = sc.spec["render"]

@@ -34,12 +34,10 @@ ranges. :func:`sample_frame` draws one frame's parameters from a generator seede
 from __future__ import annotations
 
 import copy
-import difflib
 import hashlib
 import json
-import math
 import os
-from typing import Any, Dict, List, Optional, Tuple  # noqa: F401
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from . import raster as R
 
-__all__ = ["FAMILIES", "render_sign", "load_pictogram", "RED", "BLUE", "WHITE", "BLACK"]
+__all__ = ["FAMILIES", "render_sign", "on_background", "load_pictogram", "RED", "BLUE", "WHITE", "BLACK"]
 
 FAMILIES = ("prohibitory", "warning", "stop", "give_way", "information")
 RED = (0.55, 0.02, 0.02)
@@ -99,6 +99,12 @@ def render_sign(family: str, text: Optional[str] = None, size: int = 256) -> Dic
         _text(img, t, c, c, 0.6 * n if len(t) == 1 else 0.3 * n, WHITE, font)
         cls = f"information_{t.lower()}"
     return {"rgba": img, "class_name": cls, "family": family, "text": t}
+
+
+def on_background(rgba: np.ndarray, grey: float = 0.85) -> np.ndarray:
+    """The sign composited over a uniform grey (RGB), e.g. for projection as an opaque decal."""
+    a = rgba[..., 3:4]
+    return (rgba[..., :3] * a + np.float32(grey) * (1 - a)).astype(np.float32)
 
 
 def load_pictogram(path: str, class_name: str) -> Dict[str, Any]:
