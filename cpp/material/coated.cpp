@@ -221,6 +221,15 @@ class CoatedMaterial final : public Material {
     return pdf;
   }
 
+  Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const override {
+    *pdf_out = 0.f;
+    Setup s;
+    if (!setup(si, wo, &s)) return Color(0.f);
+    Color f;
+    eval_pdf(s, si, wi, &f, pdf_out);
+    return f;
+  }
+
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float u_lobe, const Vec2f& u,
               BsdfSample* out) const override {
     Setup s;

@@ -76,6 +76,13 @@ class ConductorMaterial final : public Material {
     return !m_smooth && evaluate(si, wo, wi, &f, &p) ? p : 0.f;
   }
 
+  Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const override {
+    Color f;
+    if (!m_smooth && evaluate(si, wo, wi, &f, pdf_out)) return f;
+    *pdf_out = 0.f;
+    return Color(0.f);
+  }
+
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
     Frame f;
     float side;

@@ -17,37 +17,33 @@ class DiffuseMaterial final : public Material {
       : m_albedo(std::move(albedo)), m_alpha(std::move(alpha)), m_alpha_cutoff(alpha_cutoff), m_bump(std::move(bump)),
         m_bump_scale(bump_scale) {}
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
-    if (m_bump) return lambert::eval(bumped(si), wo, wi, eval_texture(*m_albedo, si));
-    return lambert::eval(si, wo, wi, eval_texture(*m_albedo, si));
+    return lambert::eval(normals(si), wo, wi, eval_texture(*m_albedo, si));
   }
   float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
-    return m_bump ? lambert::pdf(bumped(si), wo, wi) : lambert::pdf(si, wo, wi);
+    return lambert::pdf(normals(si), wo, wi);
   }
   Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const override {
-    if (m_bump) return lambert::eval_pdf(bumped(si), wo, wi, eval_texture(*m_albedo, si), pdf_out);
-    return lambert::eval_pdf(si, wo, wi, eval_texture(*m_albedo, si), pdf_out);
+    return lambert::eval_pdf(normals(si), wo, wi, eval_texture(*m_albedo, si), pdf_out);
   }
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
-    if (m_bump) return lambert::sample(bumped(si), wo, u, eval_texture(*m_albedo, si), out);
-    return lambert::sample(si, wo, u, eval_texture(*m_albedo, si), out);
+    return lambert::sample(normals(si), wo, u, eval_texture(*m_albedo, si), out);
   }
   Color albedo(const SurfaceInteraction& si) const override { return eval_texture(*m_albedo, si); }
   uint32_t flags() const override { return k_bsdf_diffuse | k_bsdf_reflection; }
   float alpha(const SurfaceInteraction& si) const override { return m_alpha ? eval_alpha_texture(*m_alpha, si) : 1.f; }
   bool has_alpha() const override { return m_alpha != nullptr; }
   uint32_t needs() const override {
-    return texture_needs(*m_albedo) | (m_bump ? uint32_t(k_needs_tangent) | texture_needs(*m_bump) : 0u);
+    // A 3D height needs no uv tangent (bump_normal is frame-independent then).
+    return texture_needs(*m_albedo) |
+           (m_bump ? (m_bump->needs_position() ? 0u : uint32_t(k_needs_tangent)) | texture_needs(*m_bump) : 0u);
   }
   float alpha_cutoff() const override { return m_alpha_cutoff; }
 
  private:
-  /// The interaction with the bump-mapped shading normal (the gradient is computed once
-  /// per hit: SurfaceInteraction::tex_cache).
-  SurfaceInteraction bumped(const SurfaceInteraction& si) const {
-    SurfaceInteraction b = si;
-    apply_bump_map(&b, *m_bump, m_bump_scale);
-    si.tex_cache = b.tex_cache;
-    return b;
+  /// The geometric and the (bump-mapped) shading normal; the bumped normal is computed once
+  /// per hit (SurfaceInteraction::tex_cache).
+  lambert::Normals normals(const SurfaceInteraction& si) const {
+    return m_bump ? lambert::Normals(si.ng, bump_normal(si, *m_bump, m_bump_scale)) : lambert::Normals(si);
   }
 
   std::shared_ptr<Texture> m_albedo;

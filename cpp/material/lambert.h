@@ -6,9 +6,16 @@
 
 namespace sg::lambert {
 
+/// The two normals the lobe reads: geometric `ng` and shading `ns` (bump-mapped or not).
+struct Normals {
+  Vec3f ng, ns;
+  Normals(const SurfaceInteraction& si) : ng(si.ng), ns(si.ns) {}  // NOLINT: implicit
+  Normals(const Vec3f& g, const Vec3f& s) : ng(g), ns(s) {}
+};
+
 /// Shading normal flipped to the side of `wo`; returns false when wo lies in the
 /// surface plane.
-inline bool oriented_normal(const SurfaceInteraction& si, const Vec3f& wo, Vec3f* n, float* side) {
+inline bool oriented_normal(const Normals& si, const Vec3f& wo, Vec3f* n, float* side) {
   float c = dot(si.ng, wo);
   if (c == 0.f) return false;
   *side = c > 0.f ? 1.f : -1.f;
@@ -16,7 +23,7 @@ inline bool oriented_normal(const SurfaceInteraction& si, const Vec3f& wo, Vec3f
   return true;
 }
 
-inline Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, const Color& albedo) {
+inline Color eval(const Normals& si, const Vec3f& wo, const Vec3f& wi, const Color& albedo) {
   Vec3f n;
   float side;
   if (!oriented_normal(si, wo, &n, &side)) return Color(0.f);
@@ -27,7 +34,7 @@ inline Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi
   return cos_i > 0.f ? albedo * (cos_i * k_inv_pi) : Color(0.f);
 }
 
-inline float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) {
+inline float pdf(const Normals& si, const Vec3f& wo, const Vec3f& wi) {
   Vec3f n;
   float side;
   if (!oriented_normal(si, wo, &n, &side)) return 0.f;
@@ -37,7 +44,7 @@ inline float pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi)
 }
 
 /// eval and pdf in one pass (they share the orientation tests and the cosine).
-inline Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, const Color& albedo,
+inline Color eval_pdf(const Normals& si, const Vec3f& wo, const Vec3f& wi, const Color& albedo,
                       float* pdf_out) {
   *pdf_out = 0.f;
   Vec3f n;
@@ -50,7 +57,7 @@ inline Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f
   return albedo * (cos_i * k_inv_pi);
 }
 
-inline bool sample(const SurfaceInteraction& si, const Vec3f& wo, const Vec2f& u, const Color& albedo,
+inline bool sample(const Normals& si, const Vec3f& wo, const Vec2f& u, const Color& albedo,
                    BsdfSample* out) {
   Vec3f n;
   float side;

@@ -53,6 +53,16 @@ class MixMaterial final : public Material {
     return m_a->pdf(si, wo, wi) * (1.f - w) + m_b->pdf(si, wo, wi) * w;
   }
 
+  Color eval_pdf(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, float* pdf_out) const override {
+    float w = weight(si);
+    if (w <= 0.f) return m_a->eval_pdf(si, wo, wi, pdf_out);
+    if (w >= 1.f) return m_b->eval_pdf(si, wo, wi, pdf_out);
+    float pa, pb;
+    Color fa = m_a->eval_pdf(si, wo, wi, &pa), fb = m_b->eval_pdf(si, wo, wi, &pb);
+    *pdf_out = pa * (1.f - w) + pb * w;
+    return fa * (1.f - w) + fb * w;
+  }
+
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float u_lobe, const Vec2f& u,
               BsdfSample* out) const override {
     float w = weight(si);

@@ -34,21 +34,28 @@ namespace sg {
 /// NOTE: the same clamp-to-hemisphere fix as pbrt-v4's NormalMap()/FaceForward usage and
 /// Blender Cycles' ensure_valid_reflection (Schuessler et al. 2017, "Microfacet-based
 /// Normal Mapping for Robust Monte Carlo Path Tracing", sec. 2, describe the problem).
-inline void apply_tangent_normal(SurfaceInteraction* si, Vec3f n_t) {
+/// The world-space normal of tangent-space direction `n_t` in frame `f` at `si`, kept in the
+/// hemisphere of ng as described above; returns si.ns when n_t is zero or not finite.
+inline Vec3f perturbed_normal(const SurfaceInteraction& si, const Frame& f, const Vec3f& n_t) {
   constexpr float k_min_cos = 1e-3f;
-  Frame f = si->shading_frame();
   float len = length(n_t);
-  if (!(len > 0.f) || !std::isfinite(len)) return;
+  if (!(len > 0.f) || !std::isfinite(len)) return si.ns;
   Vec3f n = f.to_world(n_t / len);
-  float c = dot(n, si->ng);
+  float c = dot(n, si.ng);
   if (c < k_min_cos) {
     // Move n towards ng until it lies k_min_cos above the geometric plane.
-    Vec3f tangential = n - si->ng * c;
+    Vec3f tangential = n - si.ng * c;
     float tl = length(tangential);
-    if (tl > 0.f) n = tangential / tl * std::sqrt(1.f - k_min_cos * k_min_cos) + si->ng * k_min_cos;
-    else n = si->ng;
+    if (tl > 0.f) n = tangential / tl * std::sqrt(1.f - k_min_cos * k_min_cos) + si.ng * k_min_cos;
+    else n = si.ng;
   }
-  n = normalize(n);
+  return normalize(n);
+}
+
+inline void apply_tangent_normal(SurfaceInteraction* si, Vec3f n_t) {
+  float len = length(n_t);
+  if (!(len > 0.f) || !std::isfinite(len)) return;
+  Vec3f n = perturbed_normal(*si, si->shading_frame(), n_t);
   // Gram-Schmidt: the tangent keeps following u as closely as possible.
   Vec3f t = si->dpdu - n * dot(n, si->dpdu);
   float tl = length(t);
@@ -144,6 +151,35 @@ inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& heigh
   float dhdv = (h(0.f, d) - h(0.f, -d)) / (2.f * d);
   si->tex_cache.put(&height, 1, Color(dhdu, dhdv, 0.f));
   apply_tangent_normal(si, Vec3f(-scale * dhdu, -scale * dhdv, 1.f));
+}
+
+/// The bump-mapped shading normal (what apply_bump_map leaves in si.ns) without touching
+/// `si`: computed once per hit (kept in si.tex_cache under apply_bump_map's key). Heights
+/// over 3D mappings with an analytic gradient take the direct route: the gradient's
+/// component in the tangent plane of any frame around ns (no uv tangent needed, no copy of
+/// the interaction); a zero gradient (all octaves faded by the footprint) leaves ns as is.
+inline Vec3f bump_normal(const SurfaceInteraction& si, const Texture& height, float scale) {
+  const char* key = reinterpret_cast<const char*>(&height);
+  int tag;
+  std::memcpy(&tag, &scale, sizeof(tag));
+  Color cached;
+  if (si.tex_cache.find(key + 1, tag, &cached)) return cached;
+  Vec3f n, g;
+  bool world_space;
+  if (height.needs_position() && si.world_from_object && height.eval_gradient(texture_point(si), &g, &world_space)) {
+    Frame f = si.shading_frame();
+    auto along = [&](const Vec3f& dir) {
+      return dot(g, world_space ? dir : si.world_from_object->apply_inverse_vector(dir));
+    };
+    float dhds = along(f.s), dhdt = along(f.t);
+    n = (dhds == 0.f && dhdt == 0.f) ? si.ns : perturbed_normal(si, f, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
+  } else {
+    SurfaceInteraction b = si;
+    apply_bump_map_uncached(&b, height, scale);
+    n = b.ns;
+  }
+  si.tex_cache.put(key + 1, tag, n);
+  return n;
 }
 
 }  // namespace sg

@@ -11,6 +11,7 @@ class ConstantTexture final : public Texture {
   Color eval(const Vec2f&, float) const override { return m_value; }
   Color average() const override { return m_value; }
   bool is_constant() const override { return true; }
+  bool needs_uv_footprint() const override { return false; }
 
  private:
   Color m_value;
