@@ -25,10 +25,24 @@ class NoiseBasis {
   /// Value noise in [-1, 1]: random lattice values, quintic interpolation.
   float value(const Vec3f& p) const;
   /// A hash of a lattice cell (for cellular noise and per-cell randomness), in [0, 2^32).
-  uint32_t hash(int x, int y, int z) const;
+  uint32_t hash(int x, int y, int z) const { return hash_cell(m_hash_seed, x, y, z); }
+  uint32_t hash_seed() const { return m_hash_seed; }
+  /// The hash behind hash(): 32-bit integer arithmetic only, so that it vectorizes.
+  /// NOTE: the spatial hash of Teschner et al. 2003 ("Optimized Spatial Hashing for
+  /// Collision Detection of Deformable Objects": x p1 xor y p2 xor z p3) with odd
+  /// multipliers, then MurmurHash3's fmix32 finalizer (Appleby) for full avalanche.
+  static uint32_t hash_cell(uint32_t seed, int x, int y, int z) {
+    uint32_t h = seed ^ (uint32_t(x) * 0x8da6b343u) ^ (uint32_t(y) * 0xd8163841u) ^ (uint32_t(z) * 0xcb1ab31fu);
+    h ^= h >> 16;
+    h *= 0x85ebca6bu;
+    h ^= h >> 13;
+    h *= 0xc2b2ae35u;
+    return h ^ (h >> 16);
+  }
 
  private:
   std::array<uint8_t, 512> m_perm;
+  uint32_t m_hash_seed;
 };
 
 enum class NoiseKind { Perlin, Value };
@@ -46,17 +60,36 @@ struct FractalParams {
   float weight_ratio() const { return std::pow(lacunarity, -H); }
 };
 
+/// A fractal sum's per-octave constants (frequency s_i, weight w_i, the normalization),
+/// computed once from FractalParams (a texture keeps one; the functions below also accept
+/// FractalParams, converted per call).
+class Fractal {
+ public:
+  static constexpr int k_max_octaves = 16;
+  Fractal(const FractalParams& f);  // NOLINT: implicit, so fbm(b, kind, p, params) reads naturally
+  int octaves() const { return m_octaves; }
+  float frequency(int i) const { return m_freq[i]; }
+  float weight(int i) const { return m_weight[i]; }
+  /// 1 / sum_i w_i when normalized, else 1.
+  float norm() const { return m_norm; }
+
+ private:
+  int m_octaves;
+  float m_freq[k_max_octaves], m_weight[k_max_octaves];
+  float m_norm;
+};
+
 /// Fractal Brownian motion sum_i w_i noise(s_i p).
 /// `footprint` is the width of the filter footprint in the units of p (0 = none): octaves
 /// above the Nyquist rate of the footprint (period < 2 footprints) are faded out, gone at a
 /// period of one footprint (replaced by their mean, 0), so the sum does not alias.
-float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint = 0.f);
+float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Fractal& f, float footprint = 0.f);
 /// Turbulence sum_i w_i |noise(s_i p)|, band-limited like fbm (faded octaves are replaced
 /// by the mean of |noise|).
-float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const FractalParams& f, float footprint = 0.f);
+float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Fractal& f, float footprint = 0.f);
 /// fbm / turbulence (Perlin basis) with their analytic gradient in the units of p.
-float fbm_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad);
-float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const FractalParams& f, float footprint, Vec3f* grad);
+float fbm_grad(const NoiseBasis& b, const Vec3f& p, const Fractal& f, float footprint, Vec3f* grad);
+float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const Fractal& f, float footprint, Vec3f* grad);
 /// Fade weight of an octave of frequency `freq` for a footprint (1 = kept, 0 = removed).
 float octave_fade(float freq, float footprint);
 /// Mean of |noise| over space (used for faded turbulence octaves).

@@ -84,6 +84,9 @@ struct SurfaceInteraction {
   /// Ambient occlusion at the point (fraction of unoccluded short rays, 1 = open), computed by
   /// the integrator when the material needs it (k_needs_ao); 1 otherwise.
   float ao = 1.f;
+  /// True at the hit of a camera ray (set by the integrator): materials that trade noise
+  /// for speed (the stochastic "mix") stay exact there, where the surface is seen directly.
+  bool primary = false;
   /// The instance transform (3D bump mapping of procedural heights shifts p_object with it).
   const Transform* world_from_object = nullptr;
   /// Texture values evaluated at this point (see TextureValueCache); whoever moves the
@@ -219,6 +222,8 @@ class Material {
   /// (MaterialNeeds bits). The integrator skips computing what no material needs; the
   /// default (everything) is always correct.
   virtual uint32_t needs() const { return k_needs_tangent | k_needs_footprint; }
+  /// Nesting depth of "mix" materials (0 for any other material).
+  virtual int mix_depth() const { return 0; }
   /// Diffuse-equivalent reflectance for the albedo output (a denoiser feature).
   virtual Color albedo(const SurfaceInteraction& si) const = 0;
   /// Union of BsdfFlags of all lobes; materials without non-delta lobes skip light sampling.

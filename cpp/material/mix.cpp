@@ -20,9 +20,27 @@
 // Where w is exactly 0 or 1 the mix forwards every call to the single component, so a
 // mask that is mostly 0 or 1 (wear, rust patches) costs what the component costs.
 //
+// `stochastic` (false): at hits of secondary rays (not at camera-ray hits, which always
+// blend exactly, so that directly seen surfaces show no selection noise), instead of
+// evaluating both components where 0 < w < 1, one is chosen per shading point -- B with
+// probability w -- and eval, pdf and sample are that component's alone. The choice is a
+// hash of the point, the outgoing direction and the mix's nesting depth (not its id, which
+// depends on what was created before), so every call at one hit (light sampling, BSDF sampling, MIS) sees the
+// same component, and renders are deterministic. Unbiased (the expectation over the
+// choice is the blend), at the price of some noise in indirect light where the mask is
+// fractional; it halves the shading cost there (band-limited wear masks are fractional at
+// most indirect hits, whose wide footprints filter the mask to its mean).
+// albedo() and emission() stay the exact blend.
+// NOTE: pbrt-v4's MixMaterial always selects stochastically (src/pbrt/materials.h,
+// MixMaterial::ChooseMaterial, with HashFloat(p, wo, material pointers)).
+//
 // Materials are looked up when the mix is created (MaterialContext::materials): the mix
 // holds the component objects, so ids must exist before the mix (no cycles are possible).
+#include <algorithm>
+#include <cstring>
+
 #include "core/error.h"
+#include "core/rng.h"
 #include "material/material_registry.h"
 
 namespace sg {
@@ -32,8 +50,10 @@ namespace {
 class MixMaterial final : public Material {
  public:
   MixMaterial(std::shared_ptr<Material> a, std::shared_ptr<Material> b, float weight,
-              std::shared_ptr<Texture> mask)
-      : m_a(std::move(a)), m_b(std::move(b)), m_weight(weight), m_mask(std::move(mask)) {
+              std::shared_ptr<Texture> mask, bool stochastic)
+      : m_a(std::move(a)), m_b(std::move(b)), m_weight(weight), m_mask(std::move(mask)), m_stochastic(stochastic) {
+    m_depth = 1 + std::max(m_a->mix_depth(), m_b->mix_depth());
+    m_salt = mix64(uint64_t(m_depth));
     m_flags = m_a->flags() | m_b->flags();
     m_emissive = m_a->is_emissive() || m_b->is_emissive();
     m_mean_weight = m_mask ? clamp01(m_mask->average().x) : m_weight;
@@ -43,6 +63,7 @@ class MixMaterial final : public Material {
     float w = weight(si);
     if (w <= 0.f) return m_a->eval(si, wo, wi);
     if (w >= 1.f) return m_b->eval(si, wo, wi);
+    if (m_stochastic && !si.primary) return choose(si, wo, w)->eval(si, wo, wi);
     return m_a->eval(si, wo, wi) * (1.f - w) + m_b->eval(si, wo, wi) * w;
   }
 
@@ -50,6 +71,7 @@ class MixMaterial final : public Material {
     float w = weight(si);
     if (w <= 0.f) return m_a->pdf(si, wo, wi);
     if (w >= 1.f) return m_b->pdf(si, wo, wi);
+    if (m_stochastic && !si.primary) return choose(si, wo, w)->pdf(si, wo, wi);
     return m_a->pdf(si, wo, wi) * (1.f - w) + m_b->pdf(si, wo, wi) * w;
   }
 
@@ -57,6 +79,7 @@ class MixMaterial final : public Material {
     float w = weight(si);
     if (w <= 0.f) return m_a->eval_pdf(si, wo, wi, pdf_out);
     if (w >= 1.f) return m_b->eval_pdf(si, wo, wi, pdf_out);
+    if (m_stochastic && !si.primary) return choose(si, wo, w)->eval_pdf(si, wo, wi, pdf_out);
     float pa, pb;
     Color fa = m_a->eval_pdf(si, wo, wi, &pa), fb = m_b->eval_pdf(si, wo, wi, &pb);
     *pdf_out = pa * (1.f - w) + pb * w;
@@ -68,6 +91,7 @@ class MixMaterial final : public Material {
     float w = weight(si);
     if (w <= 0.f) return m_a->sample(si, wo, u_lobe, u, out);
     if (w >= 1.f) return m_b->sample(si, wo, u_lobe, u, out);
+    if (m_stochastic && !si.primary) return choose(si, wo, w)->sample(si, wo, u_lobe, u, out);
     bool pick_b = u_lobe < w;
     const Material* chosen = pick_b ? m_b.get() : m_a.get();
     const Material* other = pick_b ? m_a.get() : m_b.get();
@@ -84,8 +108,10 @@ class MixMaterial final : public Material {
     }
     // The chosen component's eval and pdf are weight * pdf and pdf (sample() returns
     // weight = eval / pdf), so only the other component is evaluated.
-    Color f = out->weight * (out->pdf * w_chosen) + other->eval(si, wo, out->wi) * w_other;
-    float pdf = out->pdf * w_chosen + other->pdf(si, wo, out->wi) * w_other;
+    float other_pdf;
+    Color other_f = other->eval_pdf(si, wo, out->wi, &other_pdf);
+    Color f = out->weight * (out->pdf * w_chosen) + other_f * w_other;
+    float pdf = out->pdf * w_chosen + other_pdf * w_other;
     if (!(pdf > 0.f)) return false;
     out->weight = f / pdf;
     out->pdf = pdf;
@@ -100,6 +126,7 @@ class MixMaterial final : public Material {
   }
 
   uint32_t flags() const override { return m_flags; }
+  int mix_depth() const override { return m_depth; }
   /// Cut-outs pass through: the mix is a surface where every component that has an alpha
   /// map is opaque (a wear layer over a cut-out sign does not fill its holes). Independent
   /// of the mask, which may need more than uv (the traversal-time test has uv only).
@@ -134,11 +161,26 @@ class MixMaterial final : public Material {
   float weight(const SurfaceInteraction& si) const {
     return m_mask ? clamp01(eval_texture(*m_mask, si).x) : m_weight;
   }
+  /// The stochastic mode's component at (si.p, wo): B with probability w.
+  const Material* choose(const SurfaceInteraction& si, const Vec3f& wo, float w) const {
+    auto bits = [](float x) {
+      uint32_t b;
+      std::memcpy(&b, &x, sizeof(b));
+      return uint64_t(b);
+    };
+    uint64_t h = mix64(m_salt ^ (bits(si.p.x) | bits(si.p.y) << 32));
+    h = mix64(h ^ (bits(si.p.z) | bits(wo.x) << 32));
+    h = mix64(h ^ (bits(wo.y) | bits(wo.z) << 32));
+    return bits_to_unit_float(uint32_t(h >> 32)) < w ? m_b.get() : m_a.get();
+  }
 
   std::shared_ptr<Material> m_a, m_b;
   float m_weight;
   std::shared_ptr<Texture> m_mask;
   float m_mean_weight;
+  bool m_stochastic;
+  int m_depth;       ///< nesting depth (1 + the components')
+  uint64_t m_salt;   ///< from the depth: a chain of nested mixes chooses independently
   uint32_t m_flags;
   bool m_emissive;
 };
@@ -172,7 +214,8 @@ std::shared_ptr<Material> create_mix_material(const ParamSet& params, const Mate
       throw Error("parameter 'weight': must lie in [0, 1] (the fraction of material_b) or be a texture, got " +
                   std::to_string(weight));
   }
-  return std::make_shared<MixMaterial>(std::move(a), std::move(b), weight, std::move(mask));
+  bool stochastic = params.get_bool("stochastic", false);
+  return std::make_shared<MixMaterial>(std::move(a), std::move(b), weight, std::move(mask), stochastic);
 }
 
 }  // namespace sg

@@ -24,9 +24,7 @@ class GradientTexture final : public PointTexture {
   bool needs_position() const override { return m_mapping.needs_position(); }
   bool needs_uv_footprint() const override { return !m_mapping.needs_position(); }
   Color eval_point(const TexturePoint& q) const override {
-    float w;
-    Vec3f p = m_mapping.point(q, &w);
-    return m_shaping.color(p[m_axis]);
+    return m_shaping.color(m_mapping.point(q)[m_axis]);
   }
   Color average() const override { return m_average; }
 

@@ -69,7 +69,7 @@ class NoiseTexture final : public PointTexture {
  private:
   Pattern m_pattern;
   NoiseKind m_basis_kind;
-  FractalParams m_fractal;
+  Fractal m_fractal;
   NoiseBasis m_basis;
   ProceduralMapping m_mapping;
   ProceduralShaping m_shaping;

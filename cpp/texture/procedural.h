@@ -62,6 +62,23 @@ struct ProceduralMapping {
     }
   }
 
+  /// Mapped point without the footprint.
+  Vec3f point(const TexturePoint& q) const {
+    switch (kind) {
+      case Kind::UV: return Vec3f(q.uv.x, q.uv.y, 0.f) * scale + offset;
+      case Kind::Object: return q.p_object * scale + offset;
+      case Kind::World: return q.p_world * scale + offset;
+      case Kind::Relative:
+      default: {
+        Vec3f ext = q.object_hi - q.object_lo;
+        auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
+        Vec3f r((q.p_object.x - q.object_lo.x) / safe(ext.x), (q.p_object.y - q.object_lo.y) / safe(ext.y),
+                (q.p_object.z - q.object_lo.z) / safe(ext.z));
+        return r * scale + offset;
+      }
+    }
+  }
+
   /// Mapped point; `footprint` receives the filter width in mapped units (0 = point sample).
   Vec3f point(const TexturePoint& q, float* footprint) const {
     float smax = std::max(scale.x, std::max(scale.y, scale.z));
@@ -70,25 +87,19 @@ struct ProceduralMapping {
         float fa = std::sqrt(std::max(q.uv_axis_a.x * q.uv_axis_a.x + q.uv_axis_a.y * q.uv_axis_a.y,
                                       q.uv_axis_b.x * q.uv_axis_b.x + q.uv_axis_b.y * q.uv_axis_b.y));
         *footprint = std::max(q.uv_footprint, fa) * smax;
-        return Vec3f(q.uv.x, q.uv.y, 0.f) * scale + offset;
+        break;
       }
-      case Kind::Object:
-        *footprint = q.world_footprint * q.object_per_world * smax;
-        return q.p_object * scale + offset;
-      case Kind::World:
-        *footprint = q.world_footprint * smax;
-        return q.p_world * scale + offset;
+      case Kind::Object: *footprint = q.world_footprint * q.object_per_world * smax; break;
+      case Kind::World: *footprint = q.world_footprint * smax; break;
       case Kind::Relative:
       default: {
         Vec3f ext = q.object_hi - q.object_lo;
         auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
-        Vec3f r((q.p_object.x - q.object_lo.x) / safe(ext.x), (q.p_object.y - q.object_lo.y) / safe(ext.y),
-                (q.p_object.z - q.object_lo.z) / safe(ext.z));
         float emin = std::max(1e-12f, std::min(safe(ext.x), std::min(safe(ext.y), safe(ext.z))));
         *footprint = q.world_footprint * q.object_per_world / emin * smax;
-        return r * scale + offset;
       }
     }
+    return point(q);
   }
 };
 

@@ -1045,6 +1045,8 @@ MATERIAL = Record({
         "material_a": MaterialRef(doc="material used where weight = 0"),
         "material_b": MaterialRef(doc="material used where weight = 1"),
         "weight": ScalarOrTexture(0.5, min=0, max=1, doc="fraction of material_b (a texture: its first channel)"),
+        "stochastic": Bool(False, doc="where 0 < weight < 1, shade with one material chosen per point "
+                                      "(probability = weight) instead of both: cheaper, a little noisier"),
     },
 }, doc="material")
 

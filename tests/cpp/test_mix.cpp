@@ -52,11 +52,12 @@ struct Library {
     p.set("roughness", roughness);
     return add("coated", p);
   }
-  std::shared_ptr<Material> mix(uint32_t a, uint32_t b, ParamSet::Value weight) {
+  std::shared_ptr<Material> mix(uint32_t a, uint32_t b, ParamSet::Value weight, bool stochastic = false) {
     ParamSet p;
     p.set("material_a", int64_t(a));
     p.set("material_b", int64_t(b));
     p.set("weight", weight);
+    if (stochastic) p.set("stochastic", true);
     return create_material("mix", p, context(), "material 9");
   }
   std::string error_of(const ParamSet& p) const {
@@ -181,6 +182,73 @@ TEST(mix, diffuse_and_smooth_coated_sample_matches_pdf_chi2_with_delta) {
     ASSERT_TRUE(lib.materials[b]->sample(si, wo, 0.f, Vec2f(0.5f, 0.5f), &bs));
     EXPECT_NEAR(deltas[0].probability, w * bs.pdf, 1e-6) << what;
   }
+}
+
+// Stochastic selection: at each (point, wo) every call is the chosen component's, exactly;
+// B is chosen with probability w (binomial bound); averaged over points the mix is the blend;
+// nested mixes choose independently; the same point always chooses the same.
+TEST(mix, stochastic_selection_is_one_component_chosen_with_probability_w) {
+  Library lib;
+  uint32_t a = lib.add_diffuse(Color(0.2f, 0.5f, 0.8f)), b = lib.add_coated(Color(0.9f, 0.1f, 0.4f), 0.3);
+  auto mat_a = lib.materials[a], mat_b = lib.materials[b];
+  const double w = 0.3;
+  auto mix = lib.mix(a, b, w, true);
+  Pcg32 rng(311);
+  const int n = 40000;
+  int n_b = 0;
+  double sum_mix = 0, sum_blend = 0;
+  for (int i = 0; i < n; ++i) {
+    DVec3 nrm = random_unit(rng);
+    SurfaceInteraction si = make_si(nrm, nrm);
+    si.p = Vec3f(rng.next_float(), rng.next_float(), rng.next_float()) * 10.f;
+    Vec3f wo = to_f(direction_at_cos(nrm, 0.2 + 0.8 * rng.next_float(), rng)), wi = to_f(random_unit(rng));
+    // Which component was chosen: a probe direction above the surface, where the two differ.
+    Vec3f probe = to_f(direction_at_cos(nrm, 0.7, rng));
+    Color pm = mix->eval(si, wo, probe), pa = mat_a->eval(si, wo, probe), pb = mat_b->eval(si, wo, probe);
+    ASSERT_FALSE(pa == pb);
+    ASSERT_TRUE(pm == pa || pm == pb) << "the mix returns one component's value";
+    bool is_b = pm == pb;
+    const Material* chosen = is_b ? mat_b.get() : mat_a.get();
+    Color em = mix->eval(si, wo, wi);
+    Color ea = mat_a->eval(si, wo, wi), eb = mat_b->eval(si, wo, wi);
+    ASSERT_EQ(em, chosen->eval(si, wo, wi));
+    ASSERT_EQ(mix->pdf(si, wo, wi), chosen->pdf(si, wo, wi));
+    float p_joint;
+    ASSERT_EQ(mix->eval_pdf(si, wo, wi, &p_joint), chosen->eval(si, wo, wi));
+    ASSERT_EQ(p_joint, chosen->pdf(si, wo, wi));
+    float u_lobe = rng.next_float();
+    Vec2f u = rng.next_2d();
+    BsdfSample s_mix, s_ref;
+    ASSERT_EQ(mix->sample(si, wo, u_lobe, u, &s_mix), chosen->sample(si, wo, u_lobe, u, &s_ref));
+    if (chosen->sample(si, wo, u_lobe, u, &s_ref)) {
+      ASSERT_TRUE(same_sample(s_mix, s_ref));
+    }
+    ASSERT_EQ(mix->eval(si, wo, wi), em) << "the same point and direction choose the same";
+    n_b += is_b;
+    sum_mix += em.x;
+    sum_blend += (1 - w) * ea.x + w * eb.x;
+    // albedo stays the exact blend.
+    ASSERT_NEAR(mix->albedo(si).x, (1 - w) * mat_a->albedo(si).x + w * mat_b->albedo(si).x, 1e-6);
+  }
+  // 5 sigma of Binomial(n, w).
+  double sigma = std::sqrt(n * w * (1 - w));
+  EXPECT_NEAR(n_b, n * w, 5 * sigma) << "B chosen " << n_b << " of " << n;
+  EXPECT_NEAR(sum_mix / sum_blend, 1.0, 0.03) << "the expectation over the choice is the blend";
+  // Nested: mix(mix(A, B, 1/2), A', 1/2) picks the inner B a quarter of the time.
+  uint32_t inner = uint32_t(lib.materials.size());
+  lib.materials[inner] = lib.mix(a, b, 0.5, true);
+  uint32_t c = lib.add_diffuse(Color(0.9f, 0.9f, 0.1f));
+  auto outer = lib.mix(inner, c, 0.5, true);
+  int n_inner_b = 0;
+  const int m = 20000;
+  for (int i = 0; i < m; ++i) {
+    SurfaceInteraction si = make_si({0, 0, 1}, {0, 0, 1});
+    si.p = Vec3f(rng.next_float(), rng.next_float(), rng.next_float()) * 10.f;
+    Vec3f wo(0.f, 0.f, 1.f), wi = normalize(Vec3f(0.3f, 0.1f, 1.f));
+    ASSERT_FALSE(mat_b->eval(si, wo, wi) == mat_a->eval(si, wo, wi));
+    n_inner_b += outer->eval(si, wo, wi) == mat_b->eval(si, wo, wi);
+  }
+  EXPECT_NEAR(n_inner_b, 0.25 * m, 5 * std::sqrt(m * 0.25 * 0.75)) << "nested mixes choose independently";
 }
 
 TEST(mix, texture_mask_uses_first_channel_at_uv) {
