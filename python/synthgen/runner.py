@@ -105,6 +105,18 @@ class _Shape:
         self.unit = 1.0  # metres per mesh unit
 
 
+def _image_aspect(path: str) -> float:
+    """Width / height of an image file (its header, through OpenImageIO)."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise SynthgenError(f"{path}: cannot read the image: {oiio.geterror()}")
+    spec = inp.spec()
+    inp.close()
+    return float(spec.width) / float(max(spec.height, 1))
+
+
 class _Recorder:
     """A Scene facade that records the ids of the textures and materials added through it
     (the per-frame resources the frame renderer removes again)."""
@@ -333,7 +345,8 @@ class FrameRenderer:
                 continue
             if d.get("plate") is not None:
                 reg = plates.random_registration(d["plate"]["country"], rng)
-                img, aspect = plates.render_plate(reg, px_per_mm=1.0)["rgb"], 520.0 / 110.0
+                w_mm, h_mm = plates.SIZE_MM[reg["country"]]
+                img, aspect = plates.render_plate(reg, px_per_mm=1.0)["rgb"], w_mm / h_mm
                 info = {"kind": "plate", "country": reg["country"], "text": reg["text"]}
                 path = None
             elif d.get("pictogram") is not None:
@@ -342,7 +355,7 @@ class FrameRenderer:
                 info = {"kind": "pictogram", "class_name": sg_["class_name"]}
                 path = None
             else:
-                img, aspect, path = None, 1.0, d["image"]
+                img, aspect, path = None, _image_aspect(d["image"]), d["image"]
                 info = {"kind": "image", "file": os.path.basename(d["image"])}
             if path is None:
                 path = self._generated_image("decal", img)
@@ -354,6 +367,8 @@ class FrameRenderer:
             fov = float(np.degrees(2.0 * np.arctan(0.5 * width / aspect / (dist + 0.5 * ext[2]))))
             mat = wear.decal(rec, mat, path, position=position, look_at=target, fov=max(fov, 0.1), aspect=aspect,
                              occlusion=False, space="object")
+            # The decal's size on the object's front (object units): the image keeps its aspect.
+            info["size"] = [round(width, 6), round(width / aspect, 6)]
             done.append(info)
         o["_decals"] = done
         return mat

@@ -306,9 +306,15 @@ def test_decals_from_scenarios(tmp_path):
                                 "    material: {type: diffuse, albedo: 0.05}\n"
                                 "    decals:\n"
                                 "      - {pictogram: {family: stop}, size: 0.8}\n"
-                                "      - {plate: {country: de}, size: 0.9, height: 0.2}")
+                                "      - {plate: {country: de}, size: 0.9, height: 0.2}\n"
+                                "      - {plate: {country: ru}, size: 0.9, height: 0.8}\n"
+                                "      - {image: stripe.png, size: 0.5, height: 0.5}")
         assert "decals" in text
         g.write(text)
+    # A 3:1 image file: its decal keeps that aspect on the object.
+    stripe = np.zeros((20, 60, 3), np.float32)
+    stripe[:, ::10] = 1.0
+    oiio.ImageBuf(stripe).write(str(tmp_path / "stripe.png"))
     out = str(tmp_path / "ds")
     s = runner.run(scen, out, count=3, progress=False)
     assert s["rendered"] == 3 and not s["failures"], s.text()
@@ -320,7 +326,9 @@ def test_decals_from_scenarios(tmp_path):
         for o in meta["objects"]:
             if o["class"] == "box" and not o.get("dropped"):
                 kinds.append([d["kind"] for d in o.get("decals", [])])
-    assert kinds and all(k == ["pictogram", "plate"] for k in kinds)
+                aspects = [d["size"][0] / d["size"][1] for d in o["decals"]]
+                assert aspects == pytest.approx([1.0, 520 / 110, 520 / 112, 3.0], rel=1e-4)
+    assert kinds and all(k == ["pictogram", "plate", "plate", "image"] for k in kinds)
     # The boxes are nearly black (albedo 0.05); the decals make parts of them bright.
     bright = 0
     for k in range(3):
