@@ -62,7 +62,10 @@ class ConductorMaterial final : public Material {
  public:
   ConductorMaterial(const Color& eta, const Color& k, bool perfect, float alpha_x, float alpha_y, bool smooth,
                     std::shared_ptr<Texture> tint)
-      : m_eta(eta), m_k(k), m_perfect(perfect), m_ggx(alpha_x, alpha_y), m_smooth(smooth), m_tint(std::move(tint)) {}
+      : m_eta(eta), m_k(k), m_perfect(perfect), m_ggx(alpha_x, alpha_y), m_smooth(smooth), m_tint(std::move(tint)) {
+    m_tint_constant = m_tint->is_constant();
+    m_tint_value = m_tint->average();
+  }
 
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     Color f;
@@ -131,7 +134,9 @@ class ConductorMaterial final : public Material {
 
  private:
   Color fresnel(float cos_i) const { return m_perfect ? Color(1.f) : fresnel_conductor(cos_i, m_eta, m_k); }
-  Color tint(const SurfaceInteraction& si) const { return eval_texture(*m_tint, si); }
+  Color tint(const SurfaceInteraction& si) const {
+    return m_tint_constant ? m_tint_value : eval_texture(*m_tint, si);
+  }
 
   /// f cos_i (returned in *f) and the sampling density (*pdf) of the rough lobe; false when
   /// (wo, wi) is not a valid reflection pair.
@@ -144,21 +149,20 @@ class ConductorMaterial final : public Material {
     Vec3f lo, li;
     if (!local_pair(si, wo, wi, &lo, &li)) return false;
     Vec3f h = normalize(lo + li);
-    // NOTE: f = F D G2 / (4 cos_o cos_i) (Walter et al. 2007, eq. 20); times cos_i.
-    float dg = m_ggx.D(h) * m_ggx.G2(lo, li) / (4.f * lo.z);
+    // D and Lambda(wo) are shared by the BSDF and the density (computed once).
+    const float d = m_ggx.D(h), lambda_o = m_ggx.lambda(lo), lambda_i = m_ggx.lambda(li);
+    // NOTE: f = F D G2 / (4 cos_o cos_i) (Walter et al. 2007, eq. 20); times cos_i; G2 the
+    // height-correlated 1 / (1 + Lambda(wo) + Lambda(wi)) (Heitz 2014, eq. 99).
+    float dg = d / ((1.f + lambda_o + lambda_i) * (4.f * lo.z));
     // cos(wo, h) = cos(wi, h), symmetrized so that F is bitwise reciprocal (the float sum is
     // the same for (wo, wi) and (wi, wo)).
     *f = fresnel(0.5f * (dot(lo, h) + dot(li, h))) * tint(si) * dg;
-    *pdf = pdf_local(lo, h);
+    // Reflection through the distribution of visible normals: pdf(wi) = D_wo(h) / (4 wo.h)
+    // with D_wo(h) = G1(wo) (wo.h) D(h) / wo.z, so the cosines cancel.
+    // NOTE: Jacobian of the reflection half vector dh/dwi = 1 / (4 |wi.h|) (Walter et al.
+    // 2007, eq. 14); D_wo as in Heitz 2018, eq. 1.
+    *pdf = dot(lo, h) > 0.f ? d / ((1.f + lambda_o) * (4.f * lo.z)) : 0.f;
     return true;
-  }
-
-  /// Reflection through the distribution of visible normals: pdf(wi) = D_wo(h) / (4 wo.h).
-  /// NOTE: Jacobian of the reflection half vector dh/dwi = 1 / (4 |wi.h|) (Walter et al.
-  /// 2007, eq. 14); D_wo as in Heitz 2018, eq. 1.
-  float pdf_local(const Vec3f& lo, const Vec3f& h) const {
-    float c = dot(lo, h);
-    return c > 0.f ? m_ggx.pdf_visible(lo, h) / (4.f * c) : 0.f;
   }
 
   /// Both directions in the (mirrored) local frame; false unless both lie on the side of
@@ -178,6 +182,8 @@ class ConductorMaterial final : public Material {
   GGX m_ggx;
   bool m_smooth;
   std::shared_ptr<Texture> m_tint;
+  bool m_tint_constant;
+  Color m_tint_value;  ///< the tint when it is constant (no texture lookup per evaluation)
 };
 
 std::string float_range_error(const std::string& name, float v, const char* range) {

@@ -20,9 +20,13 @@
 //                      projector (a shadow map, e.g. a label-only render from the projector's
 //                      pose: synthgen.wear.decal makes it); points farther than that by more
 //                      than `depth_bias` (0.01 m + 1%) are occluded: outside the projection
+//   facing             only surfaces whose shading normal faces the projector are inside
+//                      (false): a cheap occlusion test that keeps the projection off the
+//                      far side of an object (exact for convex parts; needs outward normals)
 // Band-limited: the projected texture is looked up with the footprint the surface footprint
 // covers in the projected image.
-// Without a depth_map, surfaces behind others (seen from the projector) are projected onto too.
+// Without a depth_map, surfaces behind others (seen from the projector) are projected onto too
+// (with `facing`, only those that face the projector).
 #include <array>
 
 #include "texture/procedural.h"
@@ -36,10 +40,10 @@ class ProjectorTexture final : public PointTexture {
  public:
   ProjectorTexture(std::shared_ptr<Texture> tex, const Transform& world_from_projector, float fx, float fy, float cx,
                    float cy, float width, float height, bool object_space, bool mask, const Color& outside,
-                   std::shared_ptr<Texture> depth_map, float depth_bias)
+                   std::shared_ptr<Texture> depth_map, float depth_bias, bool facing)
       : m_tex(std::move(tex)), m_T(world_from_projector), m_fx(fx), m_fy(fy), m_cx(cx), m_cy(cy), m_w(width),
         m_h(height), m_object(object_space), m_mask(mask), m_outside(outside), m_depth(std::move(depth_map)),
-        m_bias(depth_bias) {}
+        m_bias(depth_bias), m_facing(facing), m_eye(world_from_projector.apply_point(Vec3f(0.f))) {}
 
   bool needs_position() const override { return true; }
   bool needs_uv_footprint() const override { return false; }
@@ -66,7 +70,8 @@ class ProjectorTexture final : public PointTexture {
     Vec2f uv;
     float z;
     Vec3f p = m_object ? qp.p_object : qp.p_world;
-    if (!project(p, &uv, &z)) return m_mask ? Color(0.f) : m_outside;
+    bool inside = project(p, &uv, &z) && (!m_facing || dot(m_object ? qp.n_object : qp.n_world, m_eye - p) > 0.f);
+    if (!inside) return m_mask ? Color(0.f) : m_outside;
     if (m_mask) return Color(1.f);
     // NOTE: a surface footprint of width f at projector depth z covers f fx / (z width) of
     // the projected image's uv range (isotropic; pbrt-v4's projection texture mapping
@@ -89,6 +94,8 @@ class ProjectorTexture final : public PointTexture {
   Color m_outside;
   std::shared_ptr<Texture> m_depth;
   float m_bias;
+  bool m_facing;
+  Vec3f m_eye;  ///< the projector's centre (in its space: world or object)
 };
 
 }  // namespace
@@ -148,8 +155,9 @@ std::shared_ptr<Texture> create_projector_texture(const ParamSet& params, const 
   }
   float bias = params.get_float("depth_bias", 0.01f);
   if (!(bias >= 0.f)) throw Error("parameter 'depth_bias': must be >= 0");
+  bool facing = params.get_bool("facing", false);
   return std::make_shared<ProjectorTexture>(std::move(tex), T, fx, fy, cx, cy, w, h, space == "object",
-                                            output == "mask", outside, std::move(depth), bias);
+                                            output == "mask", outside, std::move(depth), bias, facing);
 }
 
 }  // namespace sg

@@ -63,11 +63,15 @@ def _mask(scene: Scene, raw: Dict[str, Any], amount: float, softness: float) -> 
     return scene.add_texture("blend", dict(raw, remap=[t - 0.5 * softness, t + 0.5 * softness], smooth=True))
 
 
-def _mix(scene: Scene, base: int, wear: int, mask: int) -> int:
-    # Stochastic selection where the mask is fractional (soft edges; everywhere the footprint
-    # filters the mask to its mean, i.e. at most indirect hits): one material evaluated, not two.
+def _mix(scene: Scene, base: int, wear: int, mask: int, stochastic: bool = False) -> int:
+    """The preset's result: ``wear`` over ``base`` weighted by ``mask``. ``stochastic``
+    (rust, dirt: wear layers that are diffuse) shades secondary hits where the mask is
+    fractional -- soft edges, and most indirect hits, whose footprints filter the mask to its
+    mean -- with one material instead of two. Not for glossy wear layers (scratches, ice,
+    decals): a rarely chosen glossy layer reflecting the sun would show as fireflies in
+    indirect light."""
     return scene.add_material("mix", {"material_a": int(base), "material_b": int(wear), "weight": TextureRef(mask),
-                                      "stochastic": True})
+                                      "stochastic": bool(stochastic)})
 
 
 def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale: float = 3.0,
@@ -103,7 +107,7 @@ def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale:
         wear = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness),
                                                  "metallic": 0.0, "bump_map": TextureRef(bump_tex),
                                                  "bump_scale": float(bump)})
-    return _mix(scene, base, wear, mask)
+    return _mix(scene, base, wear, mask, stochastic=True)
 
 
 def scratches(scene: Scene, base: int, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
@@ -182,13 +186,13 @@ def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: 
                "factor": ao_weight * 0.5}
     mask = _mask(scene, raw, amount, 0.08)
     wear = scene.add_material("principled", {"base_color": [float(c) for c in color], "roughness": float(roughness)})
-    return _mix(scene, base, wear, mask)
+    return _mix(scene, base, wear, mask, stochastic=True)
 
 
 def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], look_at: Sequence[float],
           up: Sequence[float] = (0.0, 1.0, 0.0), fov: float = 20.0, aspect: float = 1.0, occlusion: bool = True,
           depth_resolution: int = 512, roughness: float = 0.4, cache_dir: Optional[str] = None,
-          space: str = "world") -> int:
+          space: str = "world", facing: Optional[bool] = None) -> int:
     """An image (sticker, graffiti, stripes, a plate) projected onto ``base`` by a pinhole
     projector at ``position`` looking at ``look_at`` (vertical ``fov`` degrees, width/height
     ``aspect``), for models with no or unusable uvs. Returns a mix of ``base`` and a principled
@@ -196,11 +200,17 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
     is now is rendered (depth only) from the projector into a shadow map, so surfaces hidden
     from the projector stay clean; move nothing in front of the projector afterwards.
     ``space="object"`` puts the projector in the object space of the instances using the
-    material (it moves with them; no occlusion test then)."""
+    material (it moves with them; no shadow-map test then). With ``facing`` (default: in
+    object space) only surfaces whose normal faces the projector receive the decal: it stays
+    off the far side of an object (exact for convex objects with outward normals; surfaces that
+    face the projector but are hidden behind other parts of a concave object are still
+    painted; single-sided sheets whose normal points away lose the decal)."""
     if space not in ("world", "object"):
         raise SynthgenError(f"wear: 'space' must be world or object, got {space!r}")
     if space == "object":
         occlusion = False
+    if facing is None:
+        facing = space == "object"
     import os
     import tempfile
 
@@ -211,7 +221,7 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
     _check("aspect", aspect, 1e-3, 1e3)
     common = {"position": [float(v) for v in position], "look_at": [float(v) for v in look_at],
               "up": [float(v) for v in up], "fov": float(fov), "width": float(aspect), "height": 1.0,
-              "space": space}
+              "space": space, "facing": bool(facing)}
     if occlusion:
         w = max(8, int(round(depth_resolution * aspect))) if aspect >= 1 else int(depth_resolution)
         h = max(8, int(round(w / aspect)))

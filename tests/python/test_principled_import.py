@@ -3,7 +3,6 @@ cpp/api/scene_import.cpp): Khronos' BoxTextured sample, and small glTF / OBJ fil
 here whose factors are known, checked through Scene.material_info and renders."""
 from __future__ import annotations
 
-import base64
 import json
 import math
 import os

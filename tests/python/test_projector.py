@@ -114,3 +114,24 @@ def test_decal_occlusion_keeps_hidden_surfaces_clean(tmp_path):
     assert (s_occ > 0.9).mean() > 0.2 and (s_all > 0.9).mean() > 0.2, "the small box carries the decal"
     assert (b_all > 0.9).mean() > 0.5, "without occlusion the decal covers the big box's face"
     assert (b_all > 0.9).mean() - (b_occ > 0.9).mean() > 0.03, "with occlusion the shadowed part stays clean"
+
+
+def test_facing_keeps_the_projection_off_faces_turned_away(tmp_path):
+    """With `facing`, a wide projector's mask is 1 exactly on the visible faces whose normal
+    points towards the projector (a box: the faces turned away stay 0, inside the frustum)."""
+    eye = np.array([-3.0, 2.5, -3.0])
+    params = {"position": eye.tolist(), "look_at": [0.0, 0.0, 0.0], "fov": 80.0, "output": "mask"}
+    r_all, cam, wfc = render(tmp_path, params)
+    r_face, _, _ = render(tmp_path, dict(params, facing=True))
+    hit = r_all.instance_id > 0
+    K = np.asarray(cam.K, np.float64)
+    y, x = np.mgrid[0:H, 0:W].astype(np.float64) + 0.5
+    z = np.where(np.isfinite(np.asarray(r_all.depth, np.float64)), np.asarray(r_all.depth, np.float64), 1.0)
+    pc = np.stack([(x - K[0, 2]) / K[0, 0] * z, (y - K[1, 2]) / K[1, 1] * z, z, np.ones_like(z)], -1)
+    pw = (pc @ np.asarray(wfc, np.float64).T)[..., :3]
+    n = np.asarray(r_all.normal, np.float64)
+    towards = np.einsum("ijk,ijk->ij", n, eye - pw) > 0
+    m_all, m_face = np.asarray(r_all.albedo)[..., 0], np.asarray(r_face.albedo)[..., 0]
+    assert np.all(m_all[hit] == 1.0), "the frustum covers the whole box"
+    assert np.all(m_face[hit & towards] == 1.0) and np.all(m_face[hit & ~towards] == 0.0)
+    assert (hit & towards).sum() > 100 and (hit & ~towards).sum() > 100, "both kinds of faces are visible"

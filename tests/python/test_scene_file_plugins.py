@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 import yaml
 
-import synthgen as sg
 from synthgen import scene_file
 
 HDR = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
