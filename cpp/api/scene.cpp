@@ -80,7 +80,7 @@ uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
     return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
   };
   auto t = create_texture(type, params, "texture " + std::to_string(id), &m_images, inputs);
-  m_textures.emplace_back(TextureEntry{type, params, t});
+  m_textures.emplace_back(TextureEntry{type, params, t, nullptr});
   return id;
 }
 
