@@ -12,11 +12,15 @@
 // side of wo (judged on the geometric normal), wi must lie on that same side of the
 // geometric normal and both directions above the (mirrored) shading normal, so shading
 // normals cannot leak light through the surface (Veach 1997, sec. 5.3).
+//
+// Bump mapping: `bump_map` (a height texture) times `bump_scale` tilts the shading normal
+// (normal_mapping.h bump_normal; e.g. the walls of a scratch's groove, synthgen.wear.scratches).
 #include <string>
 #include <vector>
 
 #include "material/material_registry.h"
 #include "material/microfacet.h"
+#include "material/normal_mapping.h"
 
 namespace sg {
 
@@ -61,8 +65,9 @@ constexpr float k_smooth_roughness = 1e-3f;
 class ConductorMaterial final : public Material {
  public:
   ConductorMaterial(const Color& eta, const Color& k, bool perfect, float alpha_x, float alpha_y, bool smooth,
-                    std::shared_ptr<Texture> tint)
-      : m_eta(eta), m_k(k), m_perfect(perfect), m_ggx(alpha_x, alpha_y), m_smooth(smooth), m_tint(std::move(tint)) {
+                    std::shared_ptr<Texture> tint, std::shared_ptr<Texture> bump, float bump_scale)
+      : m_eta(eta), m_k(k), m_perfect(perfect), m_ggx(alpha_x, alpha_y), m_smooth(smooth), m_tint(std::move(tint)),
+        m_bump(std::move(bump)), m_bump_scale(bump_scale) {
     m_tint_constant = m_tint->is_constant();
     m_tint_value = m_tint->average();
   }
@@ -89,7 +94,7 @@ class ConductorMaterial final : public Material {
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
     Frame f;
     float side;
-    if (!sided_frame(si, wo, &f, &side)) return false;
+    if (!sided(si, wo, &f, &side)) return false;
     Vec3f lo = sided_to_local(f, side, wo);
     if (lo.z <= 0.f) return false;
     if (m_smooth) {
@@ -127,12 +132,33 @@ class ConductorMaterial final : public Material {
 
   uint32_t flags() const override { return (m_smooth ? k_bsdf_delta : k_bsdf_glossy) | k_bsdf_reflection; }
   uint32_t needs() const override {
-    // Isotropic roughness does not depend on the tangent's direction (any frame around ns).
-    return (m_ggx.ax != m_ggx.ay ? uint32_t(k_needs_tangent) : 0u) |
-           texture_needs(*m_tint);
+    // Isotropic roughness does not depend on the tangent's direction (any frame around ns);
+    // a 3D height needs no tangent either (bump_normal), a uv one does.
+    bool uv_bump = m_bump && !m_bump->needs_position();
+    return (m_ggx.ax != m_ggx.ay || uv_bump ? uint32_t(k_needs_tangent) : 0u) | texture_needs(*m_tint) |
+           (m_bump ? texture_needs(*m_bump) : 0u);
   }
 
  private:
+  /// sided_frame (microfacet.h) around the bump-mapped normal when there is a bump map: the
+  /// tangent re-orthogonalized against it (anisotropy keeps following dpdu).
+  bool sided(const SurfaceInteraction& si, const Vec3f& wo, Frame* f, float* side) const {
+    if (!sided_frame(si, wo, f, side)) return false;
+    if (m_bump) {
+      Vec3f n = bump_normal(si, *m_bump, m_bump_scale);
+      Vec3f t = si.dpdu - n * dot(n, si.dpdu);
+      float tl = length(t);
+      if (tl > 1e-6f && std::isfinite(tl)) {
+        f->n = n;
+        f->s = t / tl;
+        f->t = cross(n, f->s);
+      } else {
+        *f = Frame(n);
+      }
+    }
+    return true;
+  }
+
   Color fresnel(float cos_i) const { return m_perfect ? Color(1.f) : fresnel_conductor(cos_i, m_eta, m_k); }
   Color tint(const SurfaceInteraction& si) const {
     return m_tint_constant ? m_tint_value : eval_texture(*m_tint, si);
@@ -167,10 +193,10 @@ class ConductorMaterial final : public Material {
 
   /// Both directions in the (mirrored) local frame; false unless both lie on the side of
   /// wo, above the geometric and the shading surface.
-  static bool local_pair(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, Vec3f* lo, Vec3f* li) {
+  bool local_pair(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi, Vec3f* lo, Vec3f* li) const {
     Frame f;
     float side;
-    if (!sided_frame(si, wo, &f, &side)) return false;
+    if (!sided(si, wo, &f, &side)) return false;
     if (dot(si.ng, wi) * side <= 0.f) return false;
     *lo = sided_to_local(f, side, wo);
     *li = sided_to_local(f, side, wi);
@@ -182,6 +208,8 @@ class ConductorMaterial final : public Material {
   GGX m_ggx;
   bool m_smooth;
   std::shared_ptr<Texture> m_tint;
+  std::shared_ptr<Texture> m_bump;  ///< height map (null: none)
+  float m_bump_scale;
   bool m_tint_constant;
   Color m_tint_value;  ///< the tint when it is constant (no texture lookup per evaluation)
 };
@@ -267,7 +295,15 @@ std::shared_ptr<Material> create_conductor_material(const ParamSet& params, cons
   Color avg = tint->average();
   if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
     throw Error("parameter 'specular_tint': components must lie in [0, 1]");
-  return std::make_shared<ConductorMaterial>(eta, k, perfect, alpha_x, alpha_y, smooth, tint);
+  std::shared_ptr<Texture> bump;
+  TextureRef ref;
+  if (params.get_texture("bump_map", &ref)) {
+    bump = ctx.textures ? ctx.textures(ref.id) : nullptr;
+    if (!bump) throw Error("parameter 'bump_map': texture " + std::to_string(ref.id) + " does not exist");
+  }
+  float bump_scale = params.get_float("bump_scale", 1.f);
+  if (!(bump_scale >= -100.f && bump_scale <= 100.f)) throw Error("parameter 'bump_scale': must lie in [-100, 100]");
+  return std::make_shared<ConductorMaterial>(eta, k, perfect, alpha_x, alpha_y, smooth, tint, bump, bump_scale);
 }
 
 }  // namespace sg

@@ -386,6 +386,8 @@ class FrameRenderer:
             if float(rng.random()) >= float(spec["probability"]):
                 continue
             kw = {k: v for k, v in spec.items() if k not in ("probability", "seed") and v is not None}
+            if "colors" in kw:  # ramp stops {position, color} -> (position, (r, g, b))
+                kw["colors"] = sorted((float(c["position"]), tuple(float(x) for x in c["color"])) for c in kw["colors"])
             seed = spec.get("seed")
             kw["seed"] = int(seed) if seed is not None else int(rng.integers(0, 1 << 31))
             mat = getattr(wear, effect)(rec, mat, **kw)

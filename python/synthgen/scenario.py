@@ -250,15 +250,31 @@ def _wear_effect(params: Dict[str, Field]) -> Record:
                        **params), default=None)
 
 
+_RAMP_STOP = Record({"position": Number(REQUIRED, min=0.0, max=1.0, doc="position in the ramp"),
+                     "color": _color(REQUIRED, "linear RGB at that position")})
+
 WEAR = Record({
     "rust": _wear_effect({"scale": R(Number(3.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(0.6, min=0.0, max=2.0)),
-                          "roughness": R(Number(0.85, min=0.0, max=1.0)), "bump": R(Number(0.002, min=0.0, max=0.05))}),
+                          "roughness": R(Number(0.85, min=0.0, max=1.0)), "bump": R(Number(0.002, min=0.0, max=0.05)),
+                          "colors": ListOf(_RAMP_STOP, None, min_items=1,
+                                           doc="colour ramp of the rust (default: dark brown to orange)")}),
     "dirt": _wear_effect({"scale": R(Number(5.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(1.0, min=0.0, max=4.0)),
                           "ao_radius": R(Number(0.3, min=0.0001, max=100.0, doc="crease search distance, metres")),
-                          "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)"))}),
+                          "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)")),
+                          "color": _color((0.12, 0.09, 0.06), "dirt colour (linear RGB)"),
+                          "roughness": R(Number(0.95, min=0.0, max=1.0))}),
     "scratches": _wear_effect({"density": R(Number(8.0, min=0.001, max=10000.0)),
-                               "width": R(Number(0.04, min=0.0001, max=1.0))}),
-    "ice": _wear_effect({"scale": R(Number(4.0, min=0.001, max=1000.0)), "top_bias": R(Number(0.5, min=0.0, max=2.0))}),
+                               "width": R(Number(0.04, min=0.0001, max=1.0)),
+                               "direction": R(Choice(["x", "y", "z"], None, doc="object axis the scratches run along "
+                                                                                 "(default: random directions)")),
+                               "elongation": R(Number(8.0, min=1.0, max=100.0, doc="cell stretch along direction")),
+                               "metal": R(Choice(["aluminium", "chrome", "copper", "gold", "iron", "silver"],
+                                                 "aluminium")),
+                               "roughness": R(Number(0.35, min=0.0, max=1.0)),
+                               "depth": R(Number(0.0, min=0.0, max=0.01, doc="groove depth in metres (tilts the "
+                                                                             "metal's normal; 0: flat)"))}),
+    "ice": _wear_effect({"scale": R(Number(4.0, min=0.001, max=1000.0)), "top_bias": R(Number(0.5, min=0.0, max=2.0)),
+                         "bump": R(Number(0.003, min=0.0, max=0.05))}),
 }, default=None, doc="wear effects (synthgen.wear presets), applied in the order rust, dirt, scratches, ice")
 
 SIGN = Record({

@@ -1010,6 +1010,8 @@ MATERIAL = Record({
         "roughness_u": Number(None, min=0, max=1, doc="roughness along the tangent (instead of roughness/anisotropy)"),
         "roughness_v": Number(None, min=0, max=1, doc="roughness along the bitangent"),
         "specular_tint": ColorOrTexture(None, min=0, max=1, doc="multiplies the reflection"),
+        "bump_map": TextureRefField(doc="height map (red channel)"),
+        "bump_scale": Number(1.0, min=-100, max=100, doc="height in uv units"),
     },
     "dielectric": {
         "ior": Number(1.5, min=1, max=10, doc="index of refraction inside (must differ from exterior_ior "

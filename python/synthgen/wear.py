@@ -112,17 +112,21 @@ def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale:
 
 def scratches(scene: Scene, base: int, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
               amount: float = 1.0, direction: Optional[Sequence[float]] = None, elongation: float = 8.0,
-              metal: str = "aluminium", roughness: float = 0.35) -> int:
+              metal: str = "aluminium", roughness: float = 0.35, depth: float = 0.0) -> int:
     """Scratches through ``base`` down to bare metal: thin lines along the edges of a
     cellular pattern (F2 - F1 below ``width``), ``density`` cells per metre (object mapping);
     with ``direction`` ('x', 'y' or 'z') the cells are stretched ``elongation`` times along
     that axis, giving oriented scratches; ``amount`` < 1 keeps only a noise-selected part.
-    The scratch material is a rough ``metal`` conductor (changes albedo and roughness)."""
+    The scratch material is a rough ``metal`` conductor (changes albedo and roughness); with
+    ``depth`` > 0 (metres, [0, 0.01]) its shading normal follows the walls of a groove that
+    deep (a bump map of the line profile; costs four more cellular lookups per shaded hit in
+    a scratch)."""
     _check("density", density, 1e-3, 1e4)
     width = _check("width", width, 1e-4, 1.0)
     amount = _check("amount", amount, 0.0, 1.0)
     _check("elongation", elongation, 1.0, 100.0)
     _check("roughness", roughness, 0.0, 1.0)
+    depth = _check("depth", depth, 0.0, 0.01)
     sc = [float(density)] * 3
     if direction is not None:
         axis = {"x": 0, "y": 1, "z": 2}.get(str(direction))
@@ -138,7 +142,11 @@ def scratches(scene: Scene, base: int, *, seed: int = 0, density: float = 8.0, w
         keep = _mask(scene, {"a": TextureRef(sel), "b": 0.0, "op": "add"}, amount, 0.02)
         mask = scene.add_texture("blend", {"a": TextureRef(lines), "b": TextureRef(keep), "op": "multiply",
                                            "factor": 1.0})
-    wear = scene.add_material("conductor", {"metal": metal, "roughness": float(roughness)})
+    params: Dict[str, Any] = {"metal": metal, "roughness": float(roughness)}
+    if depth > 0.0:
+        # Height = -depth x the line profile (1 at the groove's centre line, 0 beyond `width`).
+        params.update(bump_map=TextureRef(lines), bump_scale=-depth)
+    wear = scene.add_material("conductor", params)
     return _mix(scene, base, wear, mask)
 
 

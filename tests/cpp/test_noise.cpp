@@ -8,6 +8,7 @@
 #include "core/noise.h"
 #include "core/params.h"
 #include "core/rng.h"
+#include "material/normal_mapping.h"
 #include "texture/texture.h"
 
 using namespace sg;
@@ -303,4 +304,40 @@ TEST(noise, analytic_gradients_match_finite_differences) {
     if (length(g - e) < 5e-2f * std::max(1.f, length(e))) ++ok;
   }
   EXPECT_GT(ok, 294);
+}
+
+// bump_normal (no uv tangent, no copy of the interaction) gives the normal apply_bump_map
+// computes in the uv tangent frame: the tangent-plane gradient does not depend on the frame.
+TEST(noise, bump_normal_equals_apply_bump_map_for_3d_heights) {
+  ParamSet p;
+  p.set("mapping", std::string("object"));
+  p.set("scale", 7.0);
+  p.set("pattern", std::string("turbulence"));
+  p.set("octaves", int64_t(3));
+  auto height = create_texture("noise", p, "test");
+  // A rotated and scaled instance: the gradient goes through the inverse transform.
+  float m[16] = {0.f, -2.f, 0.f, 1.f, 2.f, 0.f, 0.f, -3.f, 0.f, 0.f, 2.f, 0.5f, 0.f, 0.f, 0.f, 1.f};
+  Transform world_from_object = Transform::from_row_major(m, "test");
+  Pcg32 rng(14);
+  int tilted = 0;
+  for (int i = 0; i < 300; ++i) {
+    SurfaceInteraction si;
+    Vec3f n = normalize(Vec3f(rng.next_float() - 0.5f, rng.next_float() - 0.5f, rng.next_float() + 0.2f));
+    si.ng = si.ns = n;
+    Vec3f t = normalize(cross(n, Vec3f(0.3f, 1.f, 0.1f)));
+    si.dpdu = t;  // the uv tangent apply_bump_map uses
+    si.p_object = Vec3f(rng.next_float(), rng.next_float(), rng.next_float()) * 3.f;
+    si.p = world_from_object.apply_point(si.p_object);
+    si.world_from_object = &world_from_object;
+    SurfaceInteraction a = si;
+    apply_bump_map(&a, *height, 0.02f);
+    SurfaceInteraction b = si;
+    b.dpdu = Vec3f(0.f);  // bump_normal's case: no tangent
+    Vec3f nb = bump_normal(b, *height, 0.02f);
+    ASSERT_LT(length(nb - a.ns), 1e-4f) << i;
+    ASSERT_NEAR(length(nb), 1.f, 1e-5f);
+    ASSERT_EQ(bump_normal(b, *height, 0.02f), nb) << "cached per hit";
+    tilted += dot(nb, n) < 0.9999f;
+  }
+  EXPECT_GT(tilted, 250) << "the bump changes the normal";
 }

@@ -139,3 +139,38 @@ def test_dirt_gathers_in_creases_by_ambient_occlusion():
     assert dirty(alb[near]).mean() > dirty(alb[far]).mean() + 0.3
     alb0, _, _ = ground_albedo(0.0)
     assert abs(dirty(alb0[near]).mean() - dirty(alb0[far]).mean()) < 0.2
+
+
+def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
+    """scratches(depth > 0): the metal in a scratch follows the groove's walls (bump map of the
+    line profile). Rendered with and without depth: pixels showing only the paint (albedo of
+    the base) are bit-identical; pixels in the scratches' walls change."""
+    def render(depth):
+        s = sg.Scene()
+        g = P.plane(4.0, 4.0)
+        mesh = s.add_mesh(g["positions"], g["indices"], normals=g["normals"])  # no uvs needed
+        base = s.add_material("diffuse", {"albedo": [0.6, 0.1, 0.1]})
+        mat = wear.scratches(s, base, density=3.0, width=0.05, seed=3, roughness=0.2, depth=depth)
+        s.add_instance(mesh, np.eye(4), class_id=1, material_id=mat)
+        s.add_light("sun", {"direction": [0.4, 1.0, 0.2], "irradiance": 3.0, "angular_diameter": 0.0})
+        pose = sg.PinholeCamera.look_at((0.0, 2.5, -0.8), (0.0, 0.0, 0.2), (0.0, 1.0, 0.0))
+        s.set_camera(sg.PinholeCamera.from_fov(50.0, 96, 96, pose))
+        r = s.render(spp=4, max_depth=2, seed=5)
+        return np.asarray(r.rgb, np.float64), np.asarray(s.render(spp=1, labels_only=True).albedo, np.float64)
+
+    flat, albedo = render(0.0)
+    grooved, _ = render(0.002)
+    at_paint = np.all(np.abs(albedo - [0.6, 0.1, 0.1]) < 1e-6, axis=-1)
+    scratch = ~at_paint & (albedo.sum(axis=-1) > 0)
+    # Pixels whose neighbours show paint too (a pixel's samples spread over its footprint).
+    paint = at_paint.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            paint &= np.roll(np.roll(at_paint, dy, axis=0), dx, axis=1)
+    assert paint.sum() > 1000 and scratch.sum() > 300, (paint.sum(), scratch.sum())
+    assert np.array_equal(flat[paint], grooved[paint]), "the paint is unchanged"
+    changed = np.abs(flat[scratch] - grooved[scratch]).max(axis=-1) > 1e-3
+    print(f"\n[scratch depth] {paint.sum()} paint pixels unchanged, {changed.mean():.2f} of {scratch.sum()} scratch pixels changed")
+    assert changed.mean() > 0.3, f"only {changed.mean():.2f} of the scratch pixels changed"
+    with pytest.raises(sg.SynthgenError, match="depth"):
+        wear.scratches(sg.Scene(), 0, depth=0.5)
