@@ -107,6 +107,7 @@ struct ProceduralMapping {
 /// colour ramp (grey without one), times `strength`.
 struct ProceduralShaping {
   float lo = 0.f, hi = 1.f;
+  float inv_range = 1.f;  ///< 1 / (hi - lo), kept so that a lookup multiplies instead of dividing
   bool smooth = false;
   bool invert = false;
   ColorRamp ramp;
@@ -117,6 +118,7 @@ struct ProceduralShaping {
     s.lo = r.x;
     s.hi = r.y;
     if (!(s.hi != s.lo)) throw Error("parameter 'remap': the two ends must differ");
+    s.inv_range = 1.f / (s.hi - s.lo);
     s.smooth = p.get_bool("smooth", false);
     s.invert = p.get_bool("invert", false);
     bool has_pos = p.has("ramp_positions"), has_col = p.has("ramp_colors");
@@ -135,7 +137,7 @@ struct ProceduralShaping {
   }
 
   float shape(float v) const {
-    float t = (v - lo) / (hi - lo);
+    float t = (v - lo) * inv_range;
     t = t < 0.f ? 0.f : (t > 1.f ? 1.f : t);
     if (smooth) t = t * t * (3.f - 2.f * t);
     return invert ? 1.f - t : t;
@@ -146,9 +148,9 @@ struct ProceduralShaping {
   }
   /// d shape / d v (0 where the remap clamps).
   float shape_derivative(float v) const {
-    float t = (v - lo) / (hi - lo);
+    float t = (v - lo) * inv_range;
     if (t <= 0.f || t >= 1.f) return 0.f;
-    float d = 1.f / (hi - lo);
+    float d = inv_range;
     if (smooth) d *= 6.f * t * (1.f - t);
     return invert ? -d : d;
   }
