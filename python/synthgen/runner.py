@@ -162,9 +162,15 @@ class FrameRenderer:
         self._decor: List[int] = []       # unlabelled instances (sign poles, plate posts), reused too
         self._frame_textures: List[int] = []   # textures and materials made for one frame (signs,
         self._frame_materials: List[int] = []  # plates, wear), removed when the next frame is set up
+        import shutil
         import tempfile
+        import weakref
 
+        # Generated images (signs, plates, decals) of the current frame; the directory goes
+        # when the renderer does (or at exit), files of a frame when the next one is set up.
         self._tmp = tempfile.mkdtemp(prefix="synthgen-worker-")
+        weakref.finalize(self, shutil.rmtree, self._tmp, True)
+        self._frame_images: set = set()
         self._instances: List[int] = []   # this frame's objects (a prefix of the pool)
         self._lights: List[int] = []
         self._materials: List[int] = []
@@ -301,6 +307,7 @@ class FrameRenderer:
         path = os.path.join(self._tmp, f"{name}-{digest}.exr")
         if not os.path.exists(path):
             W.write_exr(path, np.asarray(img, np.float32))
+        self._frame_images.add(path)
         return path
 
     def _image_texture(self, rec: "_Recorder", name: str, rgb: np.ndarray) -> int:
@@ -473,6 +480,7 @@ class FrameRenderer:
             self.scene.set_instance_material(inst, -1)
         old_textures, old_materials = self._frame_textures, self._frame_materials
         self._frame_textures, self._frame_materials = [], []
+        old_images, self._frame_images = self._frame_images, set()
         rec = _Recorder(self.scene, self._frame_textures, self._frame_materials)
         self._instances = []
         n_decor = 0
@@ -523,6 +531,13 @@ class FrameRenderer:
             self.scene.remove_material(mid)
         for tid in reversed(old_textures):
             self.scene.remove_texture(tid)
+        # Generated image files only the previous frame used (a batch of many frames with
+        # unique plates would otherwise fill the disk).
+        for path in old_images - self._frame_images:
+            try:
+                os.remove(path)
+            except OSError:
+                pass
         t_update = time.perf_counter()
 
         # Layouts: retry until every placed object meets the visibility criteria.

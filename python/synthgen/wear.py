@@ -206,7 +206,9 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
     ``aspect``), for models with no or unusable uvs. Returns a mix of ``base`` and a principled
     decal material weighted by the projector's frustum mask. With ``occlusion`` the scene as it
     is now is rendered (depth only) from the projector into a shadow map, so surfaces hidden
-    from the projector stay clean; move nothing in front of the projector afterwards.
+    from the projector stay clean; move nothing in front of the projector afterwards. The
+    shadow map is an EXR file in ``cache_dir`` (default: a temporary directory removed when
+    the process exits).
     ``space="object"`` puts the projector in the object space of the instances using the
     material (it moves with them; no shadow-map test then). With ``facing`` (default: in
     object space) only surfaces whose normal faces the projector receive the decal: it stays
@@ -242,6 +244,11 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
         finally:
             scene.set_camera(previous)
         d = tempfile.mkdtemp(prefix="synthgen-decal-", dir=cache_dir)
+        if cache_dir is None:  # a private temporary directory: removed when the process exits
+            import atexit
+            import shutil
+
+            atexit.register(shutil.rmtree, d, True)
         path = os.path.join(d, "depth.exr")
         write_exr(path, depth)
         dm = scene.add_texture("image", {"filename": path, "colorspace": "linear", "wrap": "clamp"})

@@ -379,3 +379,33 @@ def test_every_wear_parameter_from_yaml(tmp_path):
             assert w["ice"]["bump"] == 0.002
             seen += 1
     assert seen >= 2
+
+
+def test_generated_images_do_not_accumulate(tmp_path):
+    """Plates and signs are written as image files for the worker's scene: a long batch keeps
+    only the current frame's files (unique plates would otherwise fill the disk), and the
+    worker's directory is gone with the renderer."""
+    import gc
+
+    from synthgen import scenario
+
+    src = os.path.join(REPO, "scenarios", "road_signs.yaml")
+    small = str(tmp_path / "signs.yaml")
+    with open(src) as f, open(small, "w") as g:
+        g.write(f.read().replace("resolution: [640, 480]", "resolution: [48, 36]")
+                .replace("render: {spp: 32, max_depth: 6}", "render: {spp: 1, max_depth: 2}")
+                .replace("min_pixels: 150", "min_pixels: 1"))
+    fr = runner.FrameRenderer(scenario.load_scenario(small))
+    tmp = fr._tmp
+    counts = []
+    for k in range(8):
+        _, meta, _ = fr.render(k)
+        files = set(os.listdir(tmp))
+        # Every plate of this frame has its file; no more files than this frame's decorations.
+        plates = [o for o in meta["objects"] if o.get("plate")]
+        assert sum(name.startswith("plate-normal-") for name in files) == len(plates)
+        counts.append(len(files))
+    assert max(counts) <= 12, counts
+    del fr
+    gc.collect()
+    assert not os.path.exists(tmp), "the worker's directory is removed with the renderer"
