@@ -302,7 +302,6 @@ class PathTracer {
     const InstanceRecord& inst = sc.instances[hit.inst];
     const Material* mat = sc.material_of(inst, hit.prim);
     SurfaceInteraction si = make_interaction(inst, hit, (mat->needs() & k_needs_tangent) != 0);
-    si.primary = true;
     // The albedo label is filtered over the whole pixel's cone (no sub-pixel scaling):
     // the pixel-centre ray stands for the pixel.
     if (m_s.texture_filtering) {

@@ -67,10 +67,7 @@ class ConductorMaterial final : public Material {
   ConductorMaterial(const Color& eta, const Color& k, bool perfect, float alpha_x, float alpha_y, bool smooth,
                     std::shared_ptr<Texture> tint, std::shared_ptr<Texture> bump, float bump_scale)
       : m_eta(eta), m_k(k), m_perfect(perfect), m_ggx(alpha_x, alpha_y), m_smooth(smooth), m_tint(std::move(tint)),
-        m_bump(std::move(bump)), m_bump_scale(bump_scale) {
-    m_tint_constant = m_tint->is_constant();
-    m_tint_value = m_tint->average();
-  }
+        m_bump(std::move(bump)), m_bump_scale(bump_scale) {}
 
   Color eval(const SurfaceInteraction& si, const Vec3f& wo, const Vec3f& wi) const override {
     Color f;
@@ -160,9 +157,7 @@ class ConductorMaterial final : public Material {
   }
 
   Color fresnel(float cos_i) const { return m_perfect ? Color(1.f) : fresnel_conductor(cos_i, m_eta, m_k); }
-  Color tint(const SurfaceInteraction& si) const {
-    return m_tint_constant ? m_tint_value : eval_texture(*m_tint, si);
-  }
+  Color tint(const SurfaceInteraction& si) const { return eval_texture(*m_tint, si); }
 
   /// f cos_i (returned in *f) and the sampling density (*pdf) of the rough lobe; false when
   /// (wo, wi) is not a valid reflection pair.
@@ -210,8 +205,6 @@ class ConductorMaterial final : public Material {
   std::shared_ptr<Texture> m_tint;
   std::shared_ptr<Texture> m_bump;  ///< height map (null: none)
   float m_bump_scale;
-  bool m_tint_constant;
-  Color m_tint_value;  ///< the tint when it is constant (no texture lookup per evaluation)
 };
 
 std::string float_range_error(const std::string& name, float v, const char* range) {

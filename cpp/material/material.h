@@ -106,9 +106,6 @@ struct SurfaceInteraction {
   }
 };
 
-/// Texture lookup at an interaction, filtered over its footprint: anisotropically when the
-/// integrator provided the footprint ellipse, else isotropically over `uv_footprint`.
-/// Materials should look textures up through this rather than Texture::eval.
 /// Everything a texture may read at an interaction.
 inline TexturePoint texture_point(const SurfaceInteraction& si) {
   TexturePoint q;
@@ -134,8 +131,12 @@ inline Color eval_texture_uncached(const Texture& t, const SurfaceInteraction& s
   return t.eval(si.uv, si.uv_footprint);
 }
 
+/// Texture lookup at an interaction, filtered over its footprint: anisotropically when the
+/// integrator provided the footprint ellipse, else isotropically over `uv_footprint`; each
+/// texture's value is computed once per hit (tex_cache). Materials should look textures up
+/// through this rather than Texture::eval.
 inline Color eval_texture(const Texture& t, const SurfaceInteraction& si) {
-  if (t.is_constant()) return t.eval(si.uv, 0.f);
+  if (t.is_constant()) return t.constant_value();
   Color c;
   if (si.tex_cache.find(&t, 0, &c)) return c;
   Color v = eval_texture_uncached(t, si);

@@ -119,27 +119,12 @@ inline float fresnel_conductor(float cos_i, float eta, float k) {
   return 0.5f * (rp + rs);
 }
 
-/// The three bands at once: the same expression as the one-band function, written as loops
-/// over 4 lanes (the fourth a copy of the third) so that the compiler evaluates the bands in
-/// one vector (two square roots and two divisions for all three).
+/// The three bands at once: a loop over 4 lanes (the fourth a copy of the third) of the
+/// inlined one-band function, so that the compiler can evaluate the bands in one vector.
 inline Color fresnel_conductor(float cos_i, const Color& eta, const Color& k) {
-  cos_i = std::min(std::max(cos_i, 0.f), 1.f);
-  const float c2 = cos_i * cos_i, s2 = 1.f - c2;
   const float e[4] = {eta.x, eta.y, eta.z, eta.z}, kk[4] = {k.x, k.y, k.z, k.z};
   float r[4];
-  for (int i = 0; i < 4; ++i) {
-    float eta2 = e[i] * e[i], k2 = kk[i] * kk[i];
-    float t0 = eta2 - k2 - s2;
-    float a2b2 = std::sqrt(std::max(0.f, t0 * t0 + 4.f * eta2 * k2));
-    float a = std::sqrt(std::max(0.f, 0.5f * (a2b2 + t0)));
-    float t1 = a2b2 + c2;
-    float t2 = 2.f * cos_i * a;
-    float rs = (t1 - t2) / (t1 + t2);
-    float t3 = c2 * a2b2 + s2 * s2;
-    float t4 = t2 * s2;
-    float rp = rs * (t3 - t4) / (t3 + t4);
-    r[i] = 0.5f * (rp + rs);
-  }
+  for (int i = 0; i < 4; ++i) r[i] = fresnel_conductor(cos_i, e[i], kk[i]);
   return {r[0], r[1], r[2]};
 }
 

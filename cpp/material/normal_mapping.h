@@ -85,12 +85,33 @@ inline void apply_normal_map(SurfaceInteraction* si, const Texture& normal_map, 
 /// (pbrt-v4 sec. 10.5.2 BumpMap(), with its shift du = 0.5 (|dudx| + |dudy|), else 0.0005).
 inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& height, float scale);
 
+/// Cache key of a bumped frame: a function of the point, the height and `scale`, kept in the
+/// texture cache under keys next to the texture's address, the scale's bits as the tag.
+inline const char* bump_cache_key(const Texture& height, float scale, int* tag) {
+  std::memcpy(tag, &scale, sizeof(*tag));
+  return reinterpret_cast<const char*>(&height);
+}
+
+/// The slopes (dh/ds, dh/dt) of a 3D height along frame f's tangents, from the texture's
+/// analytic gradient; false when it has none (or no instance transform is known).
+inline bool analytic_height_slopes(const SurfaceInteraction& si, const Texture& height, const Frame& f, float* dhds,
+                                   float* dhdt) {
+  Vec3f g;
+  bool world_space;
+  if (!height.needs_position() || !si.world_from_object || !height.eval_gradient(texture_point(si), &g, &world_space))
+    return false;
+  auto along = [&](const Vec3f& dir) {
+    return dot(g, world_space ? dir : si.world_from_object->apply_inverse_vector(dir));
+  };
+  *dhds = along(f.s);
+  *dhdt = along(f.t);
+  return true;
+}
+
 inline void apply_bump_map(SurfaceInteraction* si, const Texture& height, float scale) {
-  // The bumped frame is a function of the point and `scale`: computed once per hit and kept
-  // in the texture cache (keys next to the texture's address, the scale's bits as the tag).
-  const char* key = reinterpret_cast<const char*>(&height);
+  // The bumped frame is computed once per hit (bump_cache_key).
   int tag;
-  std::memcpy(&tag, &scale, sizeof(tag));
+  const char* key = bump_cache_key(height, scale, &tag);
   Color ns, dpdu;
   if (si->tex_cache.find(key + 1, tag, &ns) && si->tex_cache.find(key + 2, tag, &dpdu)) {
     si->ns = ns;
@@ -111,14 +132,9 @@ inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& heigh
   }
   if (height.needs_position() && si->world_from_object) {
     // Analytic gradient when the texture has one (procedural noise): one evaluation.
-    Vec3f g;
-    bool world_space;
-    if (height.eval_gradient(texture_point(*si), &g, &world_space)) {
-      Frame f = si->shading_frame();
-      auto along = [&](const Vec3f& dir) {
-        return dot(g, world_space ? dir : si->world_from_object->apply_inverse_vector(dir));
-      };
-      float dhds = along(f.s), dhdt = along(f.t);
+    Frame f = si->shading_frame();
+    float dhds, dhdt;
+    if (analytic_height_slopes(*si, height, f, &dhds, &dhdt)) {
       si->tex_cache.put(&height, 1, Color(dhds, dhdt, 0.f));
       apply_tangent_normal(si, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
       return;
@@ -127,7 +143,6 @@ inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& heigh
     // tangents in world space (height and `scale` in world units: a slope of 1 per metre
     // tilts by 45 degrees), over half the world footprint or 0.1 mm, with p_object moved
     // by the same offset through the instance transform.
-    Frame f = si->shading_frame();
     float d = std::max(0.5f * si->world_footprint, 1e-4f);
     auto h = [&](const Vec3f& dir, float sgn) {
       SurfaceInteraction q = *si;
@@ -137,8 +152,8 @@ inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& heigh
       q.p_object = si->p_object + si->world_from_object->apply_inverse_vector(dw);
       return eval_texture(height, q).x;
     };
-    float dhds = (h(f.s, 1.f) - h(f.s, -1.f)) / (2.f * d);
-    float dhdt = (h(f.t, 1.f) - h(f.t, -1.f)) / (2.f * d);
+    dhds = (h(f.s, 1.f) - h(f.s, -1.f)) / (2.f * d);
+    dhdt = (h(f.t, 1.f) - h(f.t, -1.f)) / (2.f * d);
     si->tex_cache.put(&height, 1, Color(dhds, dhdt, 0.f));
     apply_tangent_normal(si, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
     return;
@@ -159,19 +174,14 @@ inline void apply_bump_map_uncached(SurfaceInteraction* si, const Texture& heigh
 /// component in the tangent plane of any frame around ns (no uv tangent needed, no copy of
 /// the interaction); a zero gradient (all octaves faded by the footprint) leaves ns as is.
 inline Vec3f bump_normal(const SurfaceInteraction& si, const Texture& height, float scale) {
-  const char* key = reinterpret_cast<const char*>(&height);
   int tag;
-  std::memcpy(&tag, &scale, sizeof(tag));
+  const char* key = bump_cache_key(height, scale, &tag);
   Color cached;
   if (si.tex_cache.find(key + 1, tag, &cached)) return cached;
-  Vec3f n, g;
-  bool world_space;
-  if (height.needs_position() && si.world_from_object && height.eval_gradient(texture_point(si), &g, &world_space)) {
-    Frame f = si.shading_frame();
-    auto along = [&](const Vec3f& dir) {
-      return dot(g, world_space ? dir : si.world_from_object->apply_inverse_vector(dir));
-    };
-    float dhds = along(f.s), dhdt = along(f.t);
+  Vec3f n;
+  const Frame f = si.shading_frame();
+  float dhds, dhdt;
+  if (analytic_height_slopes(si, height, f, &dhds, &dhdt)) {
     n = (dhds == 0.f && dhdt == 0.f) ? si.ns : perturbed_normal(si, f, Vec3f(-scale * dhds, -scale * dhdt, 1.f));
   } else {
     SurfaceInteraction b = si;

@@ -25,13 +25,8 @@ class BlendTexture final : public PointTexture {
       : m_a(std::move(a)), m_b(std::move(b)), m_f(std::move(f)), m_op(op), m_shape(shape),
         m_shaping(std::move(shaping)) {
     m_position = m_a->needs_position() || m_b->needs_position() || m_f->needs_position();
-    // Constant inputs are read once here, not through a virtual call per lookup.
-    if (m_a->is_constant()) m_const_a = m_a->average();
-    if (m_b->is_constant()) m_const_b = m_b->average();
-    if (m_f->is_constant()) m_const_f = m_f->average().x;
-    m_a_const = m_a->is_constant();
-    m_b_const = m_b->is_constant();
-    m_f_const = m_f->is_constant();
+    if (m_a->is_constant() && m_b->is_constant() && m_f->is_constant())
+      set_constant(combine(m_a->constant_value(), m_b->constant_value(), m_f->constant_value().x));
     // The average of a non-linear combination is estimated from the inputs' averages.
     m_average = combine(m_a->average(), m_b->average(), m_f->average().x);
   }
@@ -58,17 +53,15 @@ class BlendTexture final : public PointTexture {
     return m_a->needs_uv_footprint() || m_b->needs_uv_footprint() || m_f->needs_uv_footprint();
   }
   Color eval_point(const TexturePoint& q) const override {
-    return combine(m_a_const ? m_const_a : m_a->eval_point(q), m_b_const ? m_const_b : m_b->eval_point(q),
-                   m_f_const ? m_const_f : m_f->eval_point(q).x);
+    // Constant inputs are read without a virtual call.
+    return combine(m_a->is_constant() ? m_a->constant_value() : m_a->eval_point(q),
+                   m_b->is_constant() ? m_b->constant_value() : m_b->eval_point(q),
+                   (m_f->is_constant() ? m_f->constant_value() : m_f->eval_point(q)).x);
   }
-  bool is_constant() const override { return m_a->is_constant() && m_b->is_constant() && m_f->is_constant(); }
   Color average() const override { return m_average; }
 
  private:
   std::shared_ptr<Texture> m_a, m_b, m_f;
-  Color m_const_a, m_const_b;
-  float m_const_f = 0.f;
-  bool m_a_const = false, m_b_const = false, m_f_const = false;
   BlendOp m_op;
   bool m_shape;
   ProceduralShaping m_shaping;

@@ -7,10 +7,9 @@ namespace sg {
 
 class ConstantTexture final : public Texture {
  public:
-  explicit ConstantTexture(const Color& v) : m_value(v) {}
+  explicit ConstantTexture(const Color& v) : m_value(v) { set_constant(v); }
   Color eval(const Vec2f&, float) const override { return m_value; }
   Color average() const override { return m_value; }
-  bool is_constant() const override { return true; }
   bool needs_uv_footprint() const override { return false; }
 
  private:

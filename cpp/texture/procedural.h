@@ -45,6 +45,13 @@ struct ProceduralMapping {
 
   bool needs_position() const { return kind != Kind::UV; }
 
+  /// The object's bounding-box extent per axis, degenerate axes (flat meshes) counted as 1.
+  static Vec3f safe_extent(const TexturePoint& q) {
+    Vec3f ext = q.object_hi - q.object_lo;
+    auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
+    return Vec3f(safe(ext.x), safe(ext.y), safe(ext.z));
+  }
+
   /// d(mapped) / d(position) per axis (diagonal): position = p_object, or p_world for the
   /// world mapping; false for uv (no 3D gradient).
   bool jacobian(const TexturePoint& q, Vec3f* diag, bool* world_space) const {
@@ -52,9 +59,8 @@ struct ProceduralMapping {
       case Kind::Object: *diag = scale; *world_space = false; return true;
       case Kind::World: *diag = scale; *world_space = true; return true;
       case Kind::Relative: {
-        Vec3f ext = q.object_hi - q.object_lo;
-        auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
-        *diag = Vec3f(scale.x / safe(ext.x), scale.y / safe(ext.y), scale.z / safe(ext.z));
+        Vec3f ext = safe_extent(q);
+        *diag = Vec3f(scale.x / ext.x, scale.y / ext.y, scale.z / ext.z);
         *world_space = false;
         return true;
       }
@@ -70,10 +76,9 @@ struct ProceduralMapping {
       case Kind::World: return q.p_world * scale + offset;
       case Kind::Relative:
       default: {
-        Vec3f ext = q.object_hi - q.object_lo;
-        auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
-        Vec3f r((q.p_object.x - q.object_lo.x) / safe(ext.x), (q.p_object.y - q.object_lo.y) / safe(ext.y),
-                (q.p_object.z - q.object_lo.z) / safe(ext.z));
+        Vec3f ext = safe_extent(q);
+        Vec3f r((q.p_object.x - q.object_lo.x) / ext.x, (q.p_object.y - q.object_lo.y) / ext.y,
+                (q.p_object.z - q.object_lo.z) / ext.z);
         return r * scale + offset;
       }
     }
@@ -93,9 +98,8 @@ struct ProceduralMapping {
       case Kind::World: *footprint = q.world_footprint * smax; break;
       case Kind::Relative:
       default: {
-        Vec3f ext = q.object_hi - q.object_lo;
-        auto safe = [](float e) { return e > 1e-12f ? e : 1.f; };
-        float emin = std::max(1e-12f, std::min(safe(ext.x), std::min(safe(ext.y), safe(ext.z))));
+        Vec3f ext = safe_extent(q);
+        float emin = std::max(1e-12f, std::min(ext.x, std::min(ext.y, ext.z)));
         *footprint = q.world_footprint * q.object_per_world / emin * smax;
       }
     }

@@ -62,14 +62,27 @@ class Texture {
   /// footprint, which the integrator always provides (cheaply), so the uv ellipse of the ray
   /// cone is not computed for them.
   virtual bool needs_uv_footprint() const { return true; }
-  /// True when the value does not depend on uv (lets materials skip footprints).
-  virtual bool is_constant() const { return false; }
+  /// True when the value does not depend on the point (lets materials skip footprints and
+  /// lookups); the value is then constant_value(). Not virtual: read per lookup.
+  bool is_constant() const { return m_constant; }
+  const Color& constant_value() const { return m_constant_value; }
   /// Average value over the texture (used for light power estimates and albedo priors).
   virtual Color average() const = 0;
   /// True when the texture has an alpha channel (image files with 2 or 4+ channels).
   virtual bool has_alpha_channel() const { return false; }
   /// Alpha channel at `uv`, filtered like eval(); 1 without an alpha channel.
   virtual float eval_alpha(const Vec2f& uv, float footprint = 0.f) const { return 1.f; }
+
+ protected:
+  /// For textures that know at construction that they are constant.
+  void set_constant(const Color& value) {
+    m_constant = true;
+    m_constant_value = value;
+  }
+
+ private:
+  bool m_constant = false;
+  Color m_constant_value{0.f};
 };
 
 /// Base of the textures defined on a TexturePoint (procedural and composite ones): a plain

@@ -139,11 +139,6 @@ class _Recorder:
         if texture_id in self._t:
             self._t.remove(texture_id)
 
-    def remove_material(self, material_id: int) -> None:
-        self._scene.remove_material(material_id)
-        if material_id in self._m:
-            self._m.remove(material_id)
-
     def __getattr__(self, name: str) -> Any:
         return getattr(self._scene, name)
 

@@ -81,6 +81,16 @@ bool same_sample(const BsdfSample& x, const BsdfSample& y) {
   return x.wi == y.wi && x.weight == y.weight && x.pdf == y.pdf && x.flags == y.flags && x.eta == y.eta;
 }
 
+/// `mat` samples exactly as `ref` for the same random numbers (success and sample).
+void expect_same_sampling(const Material& mat, const Material& ref, const SurfaceInteraction& si, const Vec3f& wo,
+                          float u_lobe, const Vec2f& u) {
+  BsdfSample s_mat, s_ref;
+  ASSERT_EQ(mat.sample(si, wo, u_lobe, u, &s_mat), ref.sample(si, wo, u_lobe, u, &s_ref));
+  if (ref.sample(si, wo, u_lobe, u, &s_ref)) {
+    ASSERT_TRUE(same_sample(s_mat, s_ref));
+  }
+}
+
 }  // namespace
 
 TEST(mix, weight_zero_equals_a_and_weight_one_equals_b) {
@@ -100,15 +110,8 @@ TEST(mix, weight_zero_equals_a_and_weight_one_equals_b) {
     ASSERT_EQ(mix1->pdf(si, wo, wi), mat_b->pdf(si, wo, wi));
     float u_lobe = rng.next_float();
     Vec2f u = rng.next_2d();
-    BsdfSample s_mix, s_ref;
-    ASSERT_EQ(mix0->sample(si, wo, u_lobe, u, &s_mix), mat_a->sample(si, wo, u_lobe, u, &s_ref));
-    if (mat_a->sample(si, wo, u_lobe, u, &s_ref)) {
-      ASSERT_TRUE(same_sample(s_mix, s_ref));
-    }
-    ASSERT_EQ(mix1->sample(si, wo, u_lobe, u, &s_mix), mat_b->sample(si, wo, u_lobe, u, &s_ref));
-    if (mat_b->sample(si, wo, u_lobe, u, &s_ref)) {
-      ASSERT_TRUE(same_sample(s_mix, s_ref));
-    }
+    ASSERT_NO_FATAL_FAILURE(expect_same_sampling(*mix0, *mat_a, si, wo, u_lobe, u));
+    ASSERT_NO_FATAL_FAILURE(expect_same_sampling(*mix1, *mat_b, si, wo, u_lobe, u));
     ASSERT_EQ(mix0->albedo(si), mat_a->albedo(si));
     ASSERT_EQ(mix1->albedo(si), mat_b->albedo(si));
   }
@@ -186,7 +189,7 @@ TEST(mix, diffuse_and_smooth_coated_sample_matches_pdf_chi2_with_delta) {
 
 // Stochastic selection: at each (point, wo) every call is the chosen component's, exactly;
 // B is chosen with probability w (binomial bound); averaged over points the mix is the blend;
-// nested mixes choose independently; the same point always chooses the same.
+// nested mixes choose independently.
 TEST(mix, stochastic_selection_is_one_component_chosen_with_probability_w) {
   Library lib;
   uint32_t a = lib.add_diffuse(Color(0.2f, 0.5f, 0.8f)), b = lib.add_coated(Color(0.9f, 0.1f, 0.4f), 0.3);
@@ -218,12 +221,7 @@ TEST(mix, stochastic_selection_is_one_component_chosen_with_probability_w) {
     ASSERT_EQ(p_joint, chosen->pdf(si, wo, wi));
     float u_lobe = rng.next_float();
     Vec2f u = rng.next_2d();
-    BsdfSample s_mix, s_ref;
-    ASSERT_EQ(mix->sample(si, wo, u_lobe, u, &s_mix), chosen->sample(si, wo, u_lobe, u, &s_ref));
-    if (chosen->sample(si, wo, u_lobe, u, &s_ref)) {
-      ASSERT_TRUE(same_sample(s_mix, s_ref));
-    }
-    ASSERT_EQ(mix->eval(si, wo, wi), em) << "the same point and direction choose the same";
+    ASSERT_NO_FATAL_FAILURE(expect_same_sampling(*mix, *chosen, si, wo, u_lobe, u));
     n_b += is_b;
     sum_mix += em.x;
     sum_blend += (1 - w) * ea.x + w * eb.x;

@@ -262,6 +262,16 @@ def test_ctrl_c_stops_cleanly_and_keeps_completed_frames(tmp_path):
         assert len(json.load(f)["images"]) == len(done), "coco.json covers the completed frames"
 
 
+def small_road_signs(tmp_path, resolution, render):
+    """scenarios/road_signs.yaml at a small `resolution` ("[w, h]") and `render` settings."""
+    small = str(tmp_path / "signs.yaml")
+    with open(os.path.join(REPO, "scenarios", "road_signs.yaml")) as f, open(small, "w") as g:
+        g.write(f.read().replace("resolution: [640, 480]", f"resolution: {resolution}")
+                .replace("render: {spp: 32, max_depth: 6}", f"render: {render}")
+                .replace("min_pixels: 150", "min_pixels: 4"))
+    return small
+
+
 def test_road_signs_with_plates_and_wear(tmp_path):
     """A small version of scenarios/road_signs.yaml: signs and plates with wear render, their
     labels agree with the masks, plate texts are valid registrations and recorded, and a frame
@@ -269,12 +279,7 @@ def test_road_signs_with_plates_and_wear(tmp_path):
     materials are created and removed without changing results)."""
     from synthgen import plates
 
-    src = os.path.join(REPO, "scenarios", "road_signs.yaml")
-    small = str(tmp_path / "signs.yaml")
-    with open(src) as f, open(small, "w") as g:
-        g.write(f.read().replace("resolution: [640, 480]", "resolution: [96, 72]")
-                .replace("render: {spp: 32, max_depth: 6}", "render: {spp: 2, max_depth: 3}")
-                .replace("min_pixels: 150", "min_pixels: 4"))
+    small = small_road_signs(tmp_path, "[96, 72]", "{spp: 2, max_depth: 3}")
     out = str(tmp_path / "ds")
     s = runner.run(small, out, count=4, progress=False)
     assert s["rendered"] == 4 and not s["failures"], s.text()
@@ -389,12 +394,7 @@ def test_generated_images_do_not_accumulate(tmp_path):
 
     from synthgen import scenario
 
-    src = os.path.join(REPO, "scenarios", "road_signs.yaml")
-    small = str(tmp_path / "signs.yaml")
-    with open(src) as f, open(small, "w") as g:
-        g.write(f.read().replace("resolution: [640, 480]", "resolution: [48, 36]")
-                .replace("render: {spp: 32, max_depth: 6}", "render: {spp: 1, max_depth: 2}")
-                .replace("min_pixels: 150", "min_pixels: 1"))
+    small = small_road_signs(tmp_path, "[48, 36]", "{spp: 1, max_depth: 2}")
     fr = runner.FrameRenderer(scenario.load_scenario(small))
     tmp = fr._tmp
     counts = []
