@@ -1,5 +1,6 @@
 #include "api/scene.h"
 
+#include <cmath>
 #include <string>
 
 #include "core/error.h"
@@ -80,7 +81,30 @@ uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
     return tid < m_textures.size() && m_textures[tid] ? m_textures[tid]->object : nullptr;
   };
   auto t = create_texture(type, params, "texture " + std::to_string(id), &m_images, inputs);
-  m_textures.emplace_back(TextureEntry{type, params, t, nullptr});
+  m_textures.emplace_back(TextureEntry{type, params, t, nullptr, false});
+  return id;
+}
+
+uint32_t Scene::add_image_texture(std::shared_ptr<ImageData> pixels, bool integer_source, const ParamSet& params) {
+  const std::string ctx = "texture " + std::to_string(m_textures.size());
+  if (!pixels) throw Error(ctx + ": no pixels");
+  if (params.has("filename") || params.has("file"))
+    throw Error(ctx + ": an in-memory image takes no 'filename' (the pixels are the image)");
+  const ImageData& px = *pixels;
+  if (px.width < 1 || px.height < 1 || px.channels < 1 || px.channels > 4)
+    throw Error(ctx + ": image of " + std::to_string(px.width) + " x " + std::to_string(px.height) + " x " +
+                std::to_string(px.channels) + " values; expected at least 1 x 1 and 1 to 4 channels");
+  if (px.pixels.size() != size_t(px.width) * px.height * px.channels)
+    throw Error(ctx + ": pixel buffer size does not match width x height x channels");
+  for (size_t i = 0; i < px.pixels.size(); ++i)
+    if (!std::isfinite(px.pixels[i]))
+      throw Error(ctx + ": pixel (" + std::to_string(i / px.channels % px.width) + ", " +
+                  std::to_string(i / px.channels / px.width) + ") is not finite");
+  ParamSet p = params;
+  p.set("filename", m_images.add_memory(pixels, integer_source));
+  uint32_t id = add_texture("image", p);
+  m_textures[id]->pixels = std::move(pixels);
+  m_textures[id]->pixels_integer = integer_source;
   return id;
 }
 

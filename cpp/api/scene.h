@@ -68,6 +68,12 @@ class Scene {
   uint32_t add_texture(const std::string& type, const ParamSet& params);
   /// Texture from decoded linear pixels (embedded images of GLB files); `scale` multiplies.
   uint32_t add_embedded_texture(std::shared_ptr<ImageData> pixels, const Color& scale, const std::string& source);
+  /// Texture "image" of pixels held in memory instead of a file (generated plates, signs,
+  /// decals, shadow maps): `params` are the image plugin's without `filename` (colorspace,
+  /// wrap, scale, uv transform). `integer_source`: the values came from 8/16-bit integers
+  /// (colorspace auto then decodes sRGB, as for such files). Identical pixels share one
+  /// mip pyramid (the image cache keys them by content); they are saved with the scene.
+  uint32_t add_image_texture(std::shared_ptr<ImageData> pixels, bool integer_source, const ParamSet& params);
 
   // Materials ------------------------------------------------------------------------
   uint32_t add_material(const std::string& type, const ParamSet& params);
@@ -129,7 +135,8 @@ class Scene {
     std::string type;
     ParamSet params;
     std::shared_ptr<Texture> object;
-    std::shared_ptr<ImageData> pixels;  ///< for "embedded_image" textures (from GLB files)
+    std::shared_ptr<ImageData> pixels;  ///< in-memory images ("embedded_image", add_image_texture)
+    bool pixels_integer = false;        ///< `pixels` came from 8/16-bit integers
   };
   struct MaterialEntry {
     std::string type;

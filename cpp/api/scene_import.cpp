@@ -14,7 +14,7 @@ uint32_t Scene::add_embedded_texture(std::shared_ptr<ImageData> pixels, const Co
   p.set("source", source);
   p.set("scale", std::vector<double>{scale.x, scale.y, scale.z});
   auto t = make_image_texture(*pixels, scale);
-  m_textures.emplace_back(TextureEntry{"embedded_image", p, t, pixels});
+  m_textures.emplace_back(TextureEntry{"embedded_image", p, t, pixels, false});
   return id;
 }
 

@@ -5,6 +5,7 @@
 
 #include "api/scene.h"
 #include "core/error.h"
+#include "core/plugin.h"
 #include "io/image_io.h"
 
 namespace py = pybind11;
@@ -118,6 +119,70 @@ py::array wrap(std::shared_ptr<Film> owner, std::vector<T>& v, std::vector<py::s
   return py::array_t<T>(shape, v.data(), cap);
 }
 
+py::object value_to_py(const ParamSet::Value& v) {
+  return std::visit([](const auto& x) -> py::object {
+    using T = std::decay_t<decltype(x)>;
+    if constexpr (std::is_same_v<T, TextureRef>) return py::cast(x);
+    else if constexpr (std::is_same_v<T, std::vector<double>>) return py::cast(x);
+    else return py::cast(x);
+  }, v);
+}
+
+/// A bound of an integer parameter as a Python int. NOTE: bounds at or beyond 2^63 / 2^64
+/// (as doubles) stand for the int64 / uint64 maxima.
+py::object int_bound(double b) {
+  if (b >= 18446744073709551615.0) return py::int_(py::reinterpret_steal<py::object>(PyLong_FromUnsignedLongLong(UINT64_MAX)));
+  if (b >= 9223372036854775807.0) return py::int_(INT64_MAX);
+  if (b <= -9223372036854775807.0) return py::int_(INT64_MIN);
+  return py::int_(int64_t(b));
+}
+
+py::dict plugin_info_to_dict(const PluginInfo& info) {
+  py::dict d;
+  d["kind"] = info.kind;
+  d["name"] = info.name;
+  d["doc"] = info.doc;
+  d["file"] = info.file;
+  py::list params;
+  for (const auto& p : info.params) {
+    py::dict q;
+    q["name"] = p.name;
+    q["type"] = param_type_name(p.type);
+    q["default"] = p.has_default ? value_to_py(p.default_value) : py::none();
+    q["has_default"] = p.has_default;
+    q["default_doc"] = p.default_doc;
+    q["required"] = p.required;
+    bool is_int = p.type == ParamType::Int;
+    q["min"] = std::isfinite(p.lo) ? (is_int ? int_bound(p.lo) : py::object(py::float_(p.lo))) : py::none();
+    q["max"] = std::isfinite(p.hi) ? (is_int ? int_bound(p.hi) : py::object(py::float_(p.hi))) : py::none();
+    q["min_open"] = p.lo_open;
+    q["max_open"] = p.hi_open;
+    q["choices"] = p.choices;
+    q["aliases"] = p.aliases;
+    q["size"] = p.size;
+    q["doc"] = p.doc;
+    params.append(q);
+  }
+  d["params"] = params;
+  py::list exclusive;
+  for (const auto& [a, b] : info.exclusive) exclusive.append(py::make_tuple(a, b));
+  d["exclusive"] = exclusive;
+  py::list requires;
+  for (const auto& [k, o] : info.requires) requires.append(py::make_tuple(k, o));
+  d["requires"] = requires;
+  d["one_of"] = info.one_of;
+  return d;
+}
+
+/// Default of a render setting, from its declaration (integrator/path_tracer.cpp).
+template <class T>
+T render_default(const char* name) {
+  const ParamDecl* d = Registry::instance().info("render", "path_tracer").find(name);
+  if (!d || !d->has_default) throw Error(std::string("render setting '") + name + "' has no declared default");
+  if (auto b = std::get_if<bool>(&d->default_value)) return T(*b);
+  return T(std::get<int64_t>(d->default_value));
+}
+
 py::dict stats_to_dict(const RenderStats& s) {
   py::dict d;
   d["wall_time_s"] = s.wall_time_s;
@@ -156,6 +221,18 @@ PYBIND11_MODULE(_core, m) {
     }
   });
 
+  m.def("plugin_kinds", []() { return Registry::instance().kinds(); },
+        "Plugin kinds of the registry: camera, light, material, render, texture.");
+  m.def("plugin_names", [](const std::string& kind) { return Registry::instance().names(kind); }, py::arg("kind"),
+        "Names of the plugins of a kind, sorted (e.g. plugin_names('material')).");
+  m.def("plugin_info", [](const std::string& kind, const std::string& name) {
+          return plugin_info_to_dict(Registry::instance().info(kind, name));
+        }, py::arg("kind"), py::arg("name"),
+        "The declaration of a plugin: {kind, name, doc, file, params: [{name, type, default, has_default,\n"
+        "default_doc, required, min, max, min_open, max_open, choices, aliases, size, doc}], exclusive:\n"
+        "[(keys, keys)], requires: [(key, keys)], one_of: [keys]}. Every parameter's type, default, range\n"
+        "and doc is declared once, in the plugin's C++ file; schemas and docs are generated from this.");
+
   py::class_<TextureRef>(m, "TextureRef", "Reference to a texture id, usable as a material parameter.")
       .def(py::init([](uint32_t id) { return TextureRef{id}; }), py::arg("id"))
       .def_readonly("id", &TextureRef::id)
@@ -181,6 +258,11 @@ has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world spa
            }),
            py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"), py::arg("width"), py::arg("height"),
            py::arg("world_from_camera") = py::none())
+      .def_static("from_params",
+                  [](const py::dict& params) { return PinholeCamera::from_params(params_from_dict(params, "camera"), "camera"); },
+                  py::arg("params"),
+                  "The camera of plugin 'pinhole' from its declared parameters (width, height, fov_y or fx, fy,\n"
+                  "cx, cy, world_from_camera as 16 numbers); see plugin_info('camera', 'pinhole').")
       .def_readonly("fx", &PinholeCamera::fx)
       .def_readonly("fy", &PinholeCamera::fy)
       .def_readonly("cx", &PinholeCamera::cx)
@@ -285,6 +367,33 @@ a BVH build). render() commits pending edits first.)doc")
              return s.add_texture(type, params_from_dict(params, "texture '" + type + "'"));
            },
            py::arg("type"), py::arg("params") = py::dict())
+      .def("add_image_texture",
+           [](Scene& s, const py::array& pixels, const py::dict& params) {
+             auto img = std::make_shared<ImageData>();
+             bool integer = false;
+             float range = 1.f;
+             if (py::isinstance<py::array_t<uint8_t>>(pixels)) integer = true, range = 255.f;
+             else if (py::isinstance<py::array_t<uint16_t>>(pixels)) integer = true, range = 65535.f;
+             else if (!py::isinstance<py::array_t<float>>(pixels) && !py::isinstance<py::array_t<double>>(pixels))
+               throw Error("add_image_texture: pixels must be a float32, float64, uint8 or uint16 array, got " +
+                           std::string(py::str(pixels.dtype())));
+             if (pixels.ndim() != 2 && pixels.ndim() != 3)
+               throw Error("add_image_texture: pixels must be an H x W or H x W x C array");
+             auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(pixels);
+             img->height = int(a.shape(0));
+             img->width = int(a.shape(1));
+             img->channels = a.ndim() == 3 ? int(a.shape(2)) : 1;
+             img->pixels.assign(a.data(), a.data() + a.size());
+             if (integer)
+               for (float& v : img->pixels) v /= range;
+             return s.add_image_texture(std::move(img), integer,
+                                        params_from_dict(params, "texture '" + std::string("image") + "'"));
+           },
+           py::arg("pixels"), py::arg("params") = py::dict(),
+           "Texture 'image' of pixels in memory (H x W or H x W x C, C <= 4; float32/float64 linear values, or\n"
+           "uint8/uint16 sRGB-encoded ones, decoded like 8/16-bit files when colorspace is auto) instead\n"
+           "of a file: generated plates, signs, decals. `params` are the image plugin's without\n"
+           "'filename'. Identical pixels share one mip pyramid; the image is saved with the scene.")
       .def("texture_values",
            [](const Scene& s, uint32_t id, py::array_t<float, py::array::c_style | py::array::forcecast> points,
               std::array<float, 3> lo, std::array<float, 3> hi, float world_footprint, py::object uvs) {
@@ -423,8 +532,11 @@ a BVH build). render() commits pending edits first.)doc")
              }
              return film;
            },
-           py::arg("spp") = 16, py::arg("max_depth") = 8, py::arg("rr_depth") = 5, py::arg("seed") = 0,
-           py::arg("threads") = 0, py::arg("tile_size") = 16, py::arg("texture_filtering") = true,
+           py::arg("spp") = render_default<uint32_t>("spp"), py::arg("max_depth") = render_default<uint32_t>("max_depth"),
+           py::arg("rr_depth") = render_default<uint32_t>("rr_depth"), py::arg("seed") = render_default<uint64_t>("seed"),
+           py::arg("threads") = render_default<uint32_t>("threads"),
+           py::arg("tile_size") = render_default<uint32_t>("tile_size"),
+           py::arg("texture_filtering") = render_default<bool>("texture_filtering"),
            py::arg("labels_only") = false,
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"

@@ -9,8 +9,10 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "core/math.h"
+#include "core/params.h"
 
 namespace sg {
 
@@ -38,6 +40,9 @@ struct PinholeCamera {
   /// `world_from_camera` for a camera at `eye` looking at `target`; `up` is the world
   /// up vector (image y points along -up).
   static Transform look_at(const Vec3f& eye, const Vec3f& target, const Vec3f& up);
+  /// The camera of plugin "pinhole" (camera/camera.cpp declares its parameters: width,
+  /// height, fov_y or fx, fy, cx, cy, world_from_camera). Throws sg::Error naming `context`.
+  static PinholeCamera from_params(const ParamSet& params, const std::string& context = "camera");
 };
 
 }  // namespace sg

@@ -1,7 +1,6 @@
 #include "core/params.h"
 
 #include <algorithm>
-#include <sstream>
 
 #include "core/error.h"
 
@@ -142,20 +141,6 @@ bool ParamSet::get_texture(const std::string& name, TextureRef* out) const {
     return true;
   }
   return false;
-}
-
-void ParamSet::check_unused(const std::string& context) const {
-  std::vector<std::string> known(m_queried.begin(), m_queried.end());
-  for (const auto& kv : m_values) {
-    if (m_queried.count(kv.first)) continue;
-    std::ostringstream msg;
-    msg << context << ": unknown parameter '" << kv.first << "'";
-    std::string guess = closest_match(kv.first, known);
-    if (!guess.empty()) msg << " (did you mean '" << guess << "'?)";
-    msg << "; accepted parameters:";
-    for (size_t i = 0; i < known.size(); ++i) msg << (i ? ", " : " ") << known[i];
-    throw Error(msg.str());
-  }
 }
 
 }  // namespace sg

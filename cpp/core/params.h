@@ -1,8 +1,9 @@
-// Typed parameters for plugins created by name (materials, lights, textures).
+// Typed parameter values for plugins created by name (materials, lights, textures, ...).
 //
-// Plugins read their parameters with typed getters and defaults; afterwards
-// `check_unused()` rejects every key that no getter asked for, with a
-// "did you mean" suggestion drawn from the keys the plugin did ask for.
+// A ParamSet is what a caller gives (a map of typed values). Plugins do not read it
+// directly: the registry (core/plugin.h) checks it against the plugin's declaration and
+// hands the factory a Params view with the declared defaults. The getters record which
+// keys were read (`queried`), so a given key that a plugin ignores is caught.
 #pragma once
 
 #include <cstdint>
@@ -43,8 +44,8 @@ class ParamSet {
   /// Returns true and sets `out` when the parameter is a texture reference.
   bool get_texture(const std::string& name, TextureRef* out) const;
 
-  /// Throws sg::Error naming `context` for every parameter never queried.
-  void check_unused(const std::string& context) const;
+  /// True when a getter asked for `name`.
+  bool queried(const std::string& name) const { return m_queried.count(name) != 0; }
 
  private:
   const Value* lookup(const std::string& name) const;

@@ -1,5 +1,7 @@
 #include "integrator/path_tracer.h"
 
+#include "core/plugin.h"
+
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -15,6 +17,43 @@
 #include "integrator/ray_cone.h"
 
 namespace sg {
+
+namespace {
+
+// NOTE: `seed` is an unsigned 64-bit value; the declared bound 2^64 - 1 (as a double, 2^64)
+// is exported to Python as the uint64 maximum (bindings/module.cpp).
+PluginInfo render_info() {
+  return PluginInfo("render", "path_tracer",
+                    "Settings of the path tracer (keyword arguments of Scene.render; the `render` section of "
+                    "scene files and scenarios).")
+      .add(param::integer("spp", 16, "samples per pixel").in(1, 1 << 20))
+      .add(param::integer("max_depth", 8, "maximum ray segments from the camera (1: emitters only)").in(1, 1024))
+      .add(param::integer("rr_depth", 5, "path length at which Russian roulette starts").in(0, 1024))
+      .add(param::integer("seed", 0, "random seed (images are deterministic per seed)").in(0, 18446744073709551615.0))
+      .add(param::integer("threads", 0, "worker threads (0: all cores)").in(0, 4096))
+      .add(param::integer("tile_size", 16, "tile edge in pixels").in(1, 4096))
+      .add(param::boolean("texture_filtering", true, "filter textures over the ray footprint (ray cones)"));
+}
+
+std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const PluginContext&) {
+  auto rs = std::make_shared<RenderSettings>();
+  rs->spp = uint32_t(p.get_int("spp"));
+  rs->max_depth = uint32_t(p.get_int("max_depth"));
+  rs->rr_depth = uint32_t(p.get_int("rr_depth"));
+  rs->seed = uint64_t(p.get_int("seed"));
+  rs->threads = uint32_t(p.get_int("threads"));
+  rs->tile_size = uint32_t(p.get_int("tile_size"));
+  rs->texture_filtering = p.get_bool("texture_filtering");
+  return rs;
+}
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(RenderSettings, render_info(), create_render_settings)
+
+RenderSettings RenderSettings::from_params(const ParamSet& params, const std::string& context) {
+  return *Registry::instance().create<RenderSettings>("render", "path_tracer", params, PluginContext{}, context);
+}
 
 void RenderSettings::validate() const {
   if (spp == 0) throw Error("render settings: spp must be at least 1");

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
+#include "core/params.h"
 #include "film/film.h"
 #include "integrator/render_scene.h"
 
@@ -24,6 +26,10 @@ struct RenderSettings {
   bool labels_only = false;
 
   void validate() const;
+  /// Settings from parameters declared by plugin ("render", "path_tracer")
+  /// (integrator/path_tracer.cpp: one default per setting, shared by the bindings and the
+  /// YAML formats). Throws sg::Error naming `context`.
+  static RenderSettings from_params(const ParamSet& params, const std::string& context = "render settings");
 };
 
 /// Renders `scene` into `film` (allocated here). Deterministic for a given seed,

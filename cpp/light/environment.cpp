@@ -1,7 +1,7 @@
 // Light "environment": constant radiance `radiance` arriving from every direction
 // (a uniform sky). Sampled uniformly over the sphere; MIS with BSDF sampling.
 #include "core/sampling.h"
-#include "light/light_registry.h"
+#include "light/light.h"
 
 namespace sg {
 
@@ -29,10 +29,21 @@ class ConstantEnvironment final : public Light {
   float m_radius = 1.f;
 };
 
-std::shared_ptr<Light> create_environment_light(const ParamSet& params) {
-  Color l = params.get_color("radiance", Color(1.f)) * params.get_float("strength", 1.f);
-  if (l.x < 0 || l.y < 0 || l.z < 0) throw Error("parameter 'radiance': components must be non-negative");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("light", "environment", "A constant environment: the same radiance from every direction.")
+      .add(param::color("radiance", Color(1.f), "constant sky radiance per channel").at_least(0))
+      .add(param::real("strength", 1.0, "multiplies radiance").at_least(0));
+}
+
+std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
+  Color l = params.get_color("radiance") * params.get_float("strength");
   return std::make_shared<ConstantEnvironment>(l);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Light, info(), create)
 
 }  // namespace sg

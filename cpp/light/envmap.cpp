@@ -26,7 +26,7 @@
 #include "core/sampling.h"
 #include "io/image_io.h"
 #include "light/equirect.h"
-#include "light/light_registry.h"
+#include "light/light.h"
 
 namespace sg {
 
@@ -117,20 +117,27 @@ class EnvMapLight final : public Light {
   float m_radius = 1.f;
 };
 
-std::shared_ptr<Light> create_envmap_light(const ParamSet& params) {
-  std::string filename = params.get_string("filename", "");
-  float strength = params.get_float("strength", 1.f);
-  float rotation = params.get_float("rotation", 0.f);
-  Vec3f up = params.get_vec3("up", Vec3f(0.f, 1.f, 0.f));
-  bool visible = params.get_bool("visible", true);
-  if (filename.empty())
-    throw Error("parameter 'filename': required (an equirectangular image, e.g. an .exr or .hdr file)");
-  if (!(strength >= 0.f) || !std::isfinite(strength))
-    throw Error("parameter 'strength': must be a finite number >= 0, got " + std::to_string(strength));
-  if (!std::isfinite(rotation))
-    throw Error("parameter 'rotation': must be a finite angle in degrees");
-  if (!is_finite(up) || !(length(up) > 0.f))
-    throw Error("parameter 'up': must be a finite non-zero vector");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("light", "envmap",
+                    "An importance-sampled equirectangular HDR environment: top row = up, image centre = +z, "
+                    "u = 1/4 = +x.")
+      .add(param::path("filename", "equirectangular HDR image (EXR/HDR, linear; relative to the scene file in YAML)")
+               .alias("file"))
+      .add(param::real("strength", 1.0, "multiplies the map").at_least(0))
+      .add(param::real("rotation", 0.0, "rotation in degrees about the map's up axis (right-handed)"))
+      .add(param::vec3("up", Vec3f(0.f, 1.f, 0.f), "world direction of the map's top row"))
+      .add(param::boolean("visible", true, "whether camera rays see the map directly"));
+}
+
+std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
+  std::string filename = params.get_string("filename");
+  float strength = params.get_float("strength");
+  float rotation = params.get_float("rotation");
+  Vec3f up = params.get_vec3("up");
+  bool visible = params.get_bool("visible");
+  if (!(length(up) > 0.f)) throw Error("parameter 'up': must be a finite non-zero vector");
   ImageData img = load_image(filename, ColorSpace::Auto);
   if (img.width < 1 || img.height < 1 || img.channels < 1)
     throw Error("parameter 'filename': '" + filename + "' has no pixels");
@@ -145,5 +152,9 @@ std::shared_ptr<Light> create_envmap_light(const ParamSet& params) {
   }
   return std::make_shared<EnvMapLight>(std::move(pixels), img.width, img.height, world_from_map(rotation, up), visible);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Light, info(), create)
 
 }  // namespace sg

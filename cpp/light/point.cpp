@@ -1,5 +1,5 @@
 // Light "point": isotropic point light with `intensity` (W/sr per channel) at `position`.
-#include "light/light_registry.h"
+#include "light/light.h"
 
 namespace sg {
 
@@ -28,12 +28,23 @@ class PointLight final : public Light {
   Color m_intensity;
 };
 
-std::shared_ptr<Light> create_point_light(const ParamSet& params) {
-  Vec3f pos = params.get_vec3("position", Vec3f(0.f));
-  Color intensity = params.get_color("intensity", Color(1.f)) * params.get_float("strength", 1.f);
-  if (intensity.x < 0 || intensity.y < 0 || intensity.z < 0)
-    throw Error("parameter 'intensity': components must be non-negative");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("light", "point", "An isotropic point light.")
+      .add(param::vec3("position", Vec3f(0.f), "light position"))
+      .add(param::color("intensity", Color(1.f), "radiant intensity, W/sr per channel").at_least(0))
+      .add(param::real("strength", 1.0, "multiplies intensity").at_least(0));
+}
+
+std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
+  Vec3f pos = params.get_vec3("position");
+  Color intensity = params.get_color("intensity") * params.get_float("strength");
   return std::make_shared<PointLight>(pos, intensity);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Light, info(), create)
 
 }  // namespace sg

@@ -35,7 +35,7 @@
 
 #include "core/sampling.h"
 #include "light/equirect.h"
-#include "light/light_registry.h"
+#include "light/light.h"
 
 namespace sg {
 
@@ -237,7 +237,7 @@ class SkyLight final : public Light {
       p.set("direction", std::vector<double>{m_sun_dir_d[0], m_sun_dir_d[1], m_sun_dir_d[2]});
       p.set("irradiance", std::vector<double>{sun_irradiance.x, sun_irradiance.y, sun_irradiance.z});
       p.set("angular_diameter", k_sun_diameter_deg);
-      m_sun = create_sun_light(p);
+      m_sun = create_light("sun", p, "sky: sun");
     }
 
     // Ground: albedo x horizontal irradiance of sky and sun / pi (midpoint rule in
@@ -344,25 +344,35 @@ class SkyLight final : public Light {
   bool m_visible;
 };
 
-std::shared_ptr<Light> create_sky_light(const ParamSet& params) {
-  float elevation = params.get_float("elevation", 45.f);
-  float azimuth = params.get_float("azimuth", 0.f);
-  float turbidity = params.get_float("turbidity", 3.f);
-  float strength = params.get_float("strength", 1.f);
-  Color albedo = params.get_color("ground_albedo", Color(0.2f));
-  bool sun = params.get_bool("sun", true);
-  bool visible = params.get_bool("visible", true);
-  if (!(elevation >= 0.f && elevation <= 90.f))
-    throw Error("parameter 'elevation': must lie in [0, 90] degrees, got " + std::to_string(elevation));
-  if (!std::isfinite(azimuth)) throw Error("parameter 'azimuth': must be a finite angle in degrees");
-  if (!(turbidity >= 1.7f && turbidity <= 10.f))
-    throw Error("parameter 'turbidity': must lie in [1.7, 10], got " + std::to_string(turbidity));
-  if (!(strength >= 0.f) || !std::isfinite(strength))
-    throw Error("parameter 'strength': must be a finite number >= 0, got " + std::to_string(strength));
-  for (int k = 0; k < 3; ++k)
-    if (!(albedo[k] >= 0.f && albedo[k] <= 1.f))
-      throw Error("parameter 'ground_albedo': components must lie in [0, 1]");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("light", "sky",
+                    "A physical clear daylight sky with its sun (Preetham, Shirley, Smits 1999); radiance = "
+                    "luminance / 683 lm/W.")
+      .add(param::real("elevation", 45.0, "sun elevation above the horizon, degrees").in(0, 90))
+      .add(param::real("azimuth", 0.0, "sun compass bearing in degrees: 0 = -z, 90 = +x, 180 = +z"))
+      .add(param::real("turbidity", 3.0, "atmospheric turbidity (2 very clear, 3 clear, 6 hazy)").in(1.7, 10))
+      .add(param::real("strength", 1.0, "multiplies sky and sun (0.02 maps a clear day to display range)")
+               .at_least(0))
+      .add(param::color("ground_albedo", Color(0.2f), "reflectance of the ground below the horizon").in(0, 1))
+      .add(param::boolean("sun", true, "add the 0.53 degree sun disc with Preetham's attenuated radiance"))
+      .add(param::boolean("visible", true, "whether camera rays see the sky directly"));
+}
+
+std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
+  float elevation = params.get_float("elevation");
+  float azimuth = params.get_float("azimuth");
+  float turbidity = params.get_float("turbidity");
+  float strength = params.get_float("strength");
+  Color albedo = params.get_color("ground_albedo");
+  bool sun = params.get_bool("sun");
+  bool visible = params.get_bool("visible");
   return std::make_shared<SkyLight>(elevation, azimuth, turbidity, strength, albedo, sun, visible);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Light, info(), create)
 
 }  // namespace sg

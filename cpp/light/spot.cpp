@@ -11,7 +11,7 @@
 // Both angles are half-angles measured from the axis (as pbrt-v4's coneangle).
 #include <cmath>
 
-#include "light/light_registry.h"
+#include "light/light.h"
 
 namespace sg {
 
@@ -61,25 +61,36 @@ class SpotLight final : public Light {
   float m_cos_end, m_cos_start;
 };
 
-std::shared_ptr<Light> create_spot_light(const ParamSet& params) {
-  Vec3f pos = params.get_vec3("position", Vec3f(0.f));
-  Vec3f dir = params.get_vec3("direction", Vec3f(0.f, -1.f, 0.f));
-  Color intensity = params.get_color("intensity", Color(1.f));
-  float strength = params.get_float("strength", 1.f);
-  float cone = params.get_float("cone_angle", 30.f);
-  float start = params.get_float("falloff_start", std::min(25.f, cone));
-  if (!is_finite(pos)) throw Error("parameter 'position': must be finite");
-  if (!is_finite(dir) || !(length(dir) > 0.f)) throw Error("parameter 'direction': must be a finite non-zero vector");
-  if (!is_finite(intensity) || intensity.x < 0 || intensity.y < 0 || intensity.z < 0)
-    throw Error("parameter 'intensity': components must be finite and >= 0");
-  if (!(strength >= 0.f) || !std::isfinite(strength))
-    throw Error("parameter 'strength': must be a finite number >= 0, got " + std::to_string(strength));
-  if (!(cone > 0.f && cone <= 180.f))
-    throw Error("parameter 'cone_angle': must lie in (0, 180] degrees, got " + std::to_string(cone));
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("light", "spot", "A spot light: a point light limited to a cone, with a smoothstep falloff.")
+      .add(param::vec3("position", Vec3f(0.f), "light position"))
+      .add(param::vec3("direction", Vec3f(0.f, -1.f, 0.f), "cone axis"))
+      .add(param::color("intensity", Color(1.f), "radiant intensity on the axis, W/sr per channel").at_least(0))
+      .add(param::real("strength", 1.0, "multiplies intensity").at_least(0))
+      .add(param::real("cone_angle", 30.0, "half-angle where the light ends, degrees").above(0).at_most(180))
+      .add(param::real("falloff_start", "half-angle where the smooth falloff starts, degrees, in [0, cone_angle]")
+               .at_least(0)
+               .default_is("min(25, cone_angle)"));
+}
+
+std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
+  Vec3f pos = params.get_vec3("position");
+  Vec3f dir = params.get_vec3("direction");
+  Color intensity = params.get_color("intensity");
+  float strength = params.get_float("strength");
+  float cone = params.get_float("cone_angle");
+  float start = params.get_float_or("falloff_start", std::min(25.f, cone));
+  if (!(length(dir) > 0.f)) throw Error("parameter 'direction': must be a finite non-zero vector");
   if (!(start >= 0.f && start <= cone))
-    throw Error("parameter 'falloff_start': must lie in [0, cone_angle] = [0, " + std::to_string(cone) +
-                "] degrees, got " + std::to_string(start));
+    throw Error("parameter 'falloff_start': must lie in [0, cone_angle] = [0, " + format_number(cone) +
+                "] degrees, got " + format_number(start));
   return std::make_shared<SpotLight>(pos, dir, intensity * strength, cone, start);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Light, info(), create)
 
 }  // namespace sg

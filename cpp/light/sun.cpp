@@ -2,7 +2,7 @@
 // `irradiance` is W/m^2 per channel on a surface facing the sun, `angular_diameter`
 // in degrees (0.53 for the real sun; 0 makes it a delta directional light).
 #include "core/sampling.h"
-#include "light/light_registry.h"
+#include "light/light.h"
 
 namespace sg {
 
@@ -61,14 +61,43 @@ class SunLight final : public Light {
   bool m_delta;
 };
 
-std::shared_ptr<Light> create_sun_light(const ParamSet& params) {
-  Vec3f dir = params.get_vec3("direction", Vec3f(0.f, 0.f, 1.f));
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("light", "sun",
+                    "A distant disc light: the sun, from a direction or an elevation and azimuth (the sky's "
+                    "convention); 0.53 degrees wide, or a delta directional light with angular_diameter 0.")
+      .add(param::vec3("direction", Vec3f(0.f, 0.f, 1.f), "direction from the scene towards the sun"))
+      .add(param::real("elevation", "sun elevation above the horizon in degrees (with azimuth, instead of "
+                                    "direction)").in(-90, 90))
+      .add(param::real("azimuth", "sun compass bearing in degrees: 0 = -z, 90 = +x, 180 = +z").default_is("0"))
+      .add(param::color("irradiance", Color(1.f), "W/m^2 per channel on a surface facing the sun").at_least(0))
+      .add(param::real("strength", 1.0, "multiplies irradiance").at_least(0))
+      .add(param::real("angular_diameter", 0.53, "apparent diameter in degrees (0: hard shadows)").at_least(0).below(90))
+      .exclusive_of({"direction"}, {"elevation", "azimuth"})
+      .requires_all("azimuth", {"elevation"});
+}
+
+std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
+  Vec3f dir;
+  if (params.has("elevation")) {
+    // NOTE: the sky's convention (light/sky.cpp): (cos el sin az, sin el, -cos el cos az),
+    // computed in double as there.
+    constexpr double k_pi_d = 3.14159265358979323846;
+    double el = double(params.get_float("elevation")) * k_pi_d / 180.0;
+    double az = double(params.get_float_or("azimuth", 0.f)) * k_pi_d / 180.0;
+    dir = Vec3f(float(std::cos(el) * std::sin(az)), float(std::sin(el)), float(-std::cos(el) * std::cos(az)));
+  } else {
+    dir = params.get_vec3("direction");
+  }
   if (!(length(dir) > 0.f)) throw Error("parameter 'direction': must be a non-zero vector");
-  Color e = params.get_color("irradiance", Color(1.f)) * params.get_float("strength", 1.f);
-  if (e.x < 0 || e.y < 0 || e.z < 0) throw Error("parameter 'irradiance': components must be non-negative");
-  float diam = params.get_float("angular_diameter", 0.53f);
-  if (!(diam >= 0.f && diam < 90.f)) throw Error("parameter 'angular_diameter': must lie in [0, 90) degrees");
+  Color e = params.get_color("irradiance") * params.get_float("strength");
+  float diam = params.get_float("angular_diameter");
   return std::make_shared<SunLight>(dir, e, diam);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Light, info(), create)
 
 }  // namespace sg

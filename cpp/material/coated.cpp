@@ -53,7 +53,7 @@
 #include "core/quadrature.h"
 #include "core/sampling.h"
 #include "material/lambert.h"
-#include "material/material_registry.h"
+#include "material/material.h"
 #include "material/microfacet.h"
 
 namespace sg {
@@ -348,21 +348,28 @@ class CoatedMaterial final : public Material {
 
 }  // namespace
 
-std::shared_ptr<Material> create_coated_material(const ParamSet& params, const MaterialContext& ctx) {
-  auto albedo = get_color_texture(params, "albedo", Color(0.5f), ctx.textures);
-  Color avg = albedo->average();
-  if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
-    throw Error("parameter 'albedo': components must lie in [0, 1]");
-  float ior = params.get_float("ior", 1.5f);
-  if (!(ior >= 1.f && ior <= 4.f))
-    throw Error("parameter 'ior': must lie in [1, 4] (index of refraction of the coat), got " + std::to_string(ior));
-  float roughness = params.get_float("roughness", 0.f);
-  if (!(roughness >= 0.f && roughness <= 1.f))
-    throw Error("parameter 'roughness': must lie in [0, 1], got " + std::to_string(roughness));
-  float specular = params.get_float("specular", 1.f);
-  if (!(specular >= 0.f && specular <= 1.f))
-    throw Error("parameter 'specular': must lie in [0, 1], got " + std::to_string(specular));
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("material", "coated",
+                    "Plastic and car paint: a rough dielectric coat over a Lambertian base, energy-conserving "
+                    "layering (Kelemen & Szirmay-Kalos 2001).")
+      .add(param::color_texture("albedo", Color(0.5f), "Lambertian base reflectance").in(0, 1))
+      .add(param::real("ior", 1.5, "index of refraction of the coat (1: no coat)").in(1, 4))
+      .add(param::real("roughness", 0.0, "coat roughness (GGX alpha = roughness^2; 0: smooth)").in(0, 1))
+      .add(param::real("specular", 1.0, "scales the coat reflection (the rest is absorbed)").in(0, 1));
+}
+
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
+  auto albedo = color_texture_param(params, "albedo", ctx.textures);
+  float ior = params.get_float("ior");
+  float roughness = params.get_float("roughness");
+  float specular = params.get_float("specular");
   return std::make_shared<CoatedMaterial>(albedo, ior, roughness_to_alpha(roughness), specular);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "material/material_registry.h"
+#include "material/material.h"
 #include "material/microfacet.h"
 #include "material/normal_mapping.h"
 
@@ -207,73 +207,59 @@ class ConductorMaterial final : public Material {
   float m_bump_scale;
 };
 
-std::string float_range_error(const std::string& name, float v, const char* range) {
-  return "parameter '" + name + "' = " + std::to_string(v) + " is out of range; allowed: " + range;
+PluginInfo info() {
+  std::vector<std::string> metals;
+  for (const auto& p : k_metals) metals.push_back(p.name);
+  metals.push_back(k_perfect_mirror);
+  return PluginInfo("material", "conductor",
+                    "Rough GGX metal with visible-normal sampling (Heitz 2018) and the exact complex-IOR Fresnel: "
+                    "a measured metal preset or eta/k per channel, optionally anisotropic.")
+      .add(param::choice("metal", "aluminium", metals,
+                         "measured metal preset (none: a perfect mirror; not with eta/k)"))
+      .add(param::color("eta", "real part of the complex IOR per channel (with k, instead of metal)").above(0).at_most(100))
+      .add(param::color("k", "imaginary part (extinction) of the complex IOR per channel").in(0, 1000))
+      .add(param::real("roughness", 0.3, "GGX roughness (alpha = roughness^2; 0: mirror)").in(0, 1))
+      .add(param::real("anisotropy", 0.0, "stretches the highlight along the surface tangent").in(-1, 1))
+      .add(param::real("roughness_u", 0.3, "roughness along the tangent (instead of roughness/anisotropy)").in(0, 1))
+      .add(param::real("roughness_v", 0.3, "roughness along the bitangent").in(0, 1))
+      .add(param::color_texture("specular_tint", Color(1.f), "multiplies the reflection").in(0, 1))
+      .add(param::texture("bump_map", "height map (first channel)"))
+      .add(param::real("bump_scale", 1.0, "height in uv units").in(-100, 100))
+      .exclusive_of({"metal"}, {"eta", "k"})
+      .requires_all("eta", {"k"})
+      .requires_all("k", {"eta"})
+      .exclusive_of({"roughness", "anisotropy"}, {"roughness_u", "roughness_v"});
 }
 
-float get_unit_float(const ParamSet& params, const std::string& name, float def, float lo) {
-  float v = params.get_float(name, def);
-  if (!(v >= lo && v <= 1.f))
-    throw Error(float_range_error(name, v, lo == 0.f ? "[0, 1]" : "[-1, 1]"));
-  return v;
-}
-
-}  // namespace
-
-std::shared_ptr<Material> create_conductor_material(const ParamSet& params, const MaterialContext& ctx) {
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
   // --- Complex index of refraction: a preset or explicit eta and k. ---
-  bool has_metal = params.has("metal"), has_eta = params.has("eta"), has_k = params.has("k");
-  if (has_metal && (has_eta || has_k))
-    throw Error("parameters 'metal' and 'eta'/'k' are exclusive: give a metal preset or a complex IOR");
-  if (has_eta != has_k) throw Error(std::string("parameter '") + (has_eta ? "k" : "eta") +
-                                    "' is required together with '" + (has_eta ? "eta" : "k") + "'");
   Color eta(1.f), k(0.f);
   bool perfect = false;
-  if (has_eta) {
-    eta = params.get_color("eta", Color(1.f));
-    k = params.get_color("k", Color(0.f));
-    for (int c = 0; c < 3; ++c) {
-      if (!(eta[c] > 0.f && eta[c] <= 100.f))
-        throw Error("parameter 'eta': components must lie in (0, 100], got " + std::to_string(eta[c]));
-      if (!(k[c] >= 0.f && k[c] <= 1000.f))
-        throw Error("parameter 'k': components must lie in [0, 1000], got " + std::to_string(k[c]));
-    }
+  if (params.has("eta")) {
+    eta = params.get_color("eta");
+    k = params.get_color("k");
   } else {
-    std::string metal = params.get_string("metal", "aluminium");
-    std::vector<std::string> names;
-    bool found = false;
-    for (const auto& p : k_metals) {
-      names.push_back(p.name);
+    std::string metal = params.get_string("metal");
+    for (const auto& p : k_metals)
       if (metal == p.name) {
         eta = p.eta;
         k = p.k;
-        found = true;
       }
-    }
-    names.push_back(k_perfect_mirror);
-    if (metal == k_perfect_mirror) found = perfect = true;
-    if (!found) {
-      std::string guess = closest_match(metal, names), list;
-      for (size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + names[i];
-      throw Error("parameter 'metal': unknown metal '" + metal + "'" +
-                  (guess.empty() ? "" : " (did you mean '" + guess + "'?)") + "; allowed: " + list);
-    }
+    perfect = metal == k_perfect_mirror;
   }
 
   // --- Roughness: isotropic + anisotropy, or per axis. ---
   float alpha_x, alpha_y;
   bool smooth;
   if (params.has("roughness_u") || params.has("roughness_v")) {
-    if (params.has("roughness") || params.has("anisotropy"))
-      throw Error("parameters 'roughness_u'/'roughness_v' and 'roughness'/'anisotropy' are exclusive");
-    float ru = get_unit_float(params, "roughness_u", 0.3f, 0.f);
-    float rv = get_unit_float(params, "roughness_v", 0.3f, 0.f);
+    float ru = params.get_float("roughness_u");
+    float rv = params.get_float("roughness_v");
     alpha_x = roughness_to_alpha(ru);
     alpha_y = roughness_to_alpha(rv);
     smooth = ru < k_smooth_roughness && rv < k_smooth_roughness;
   } else {
-    float r = get_unit_float(params, "roughness", 0.3f, 0.f);
-    float a = get_unit_float(params, "anisotropy", 0.f, -1.f);
+    float r = params.get_float("roughness");
+    float a = params.get_float("anisotropy");
     // NOTE: anisotropy as in Burley 2012, "Physically-Based Shading at Disney", addendum B.2:
     // aspect = sqrt(1 - 0.9 |a|), alpha_x = alpha / aspect, alpha_y = alpha * aspect;
     // positive values stretch the highlight along dpdu, negative ones swap the axes.
@@ -284,19 +270,14 @@ std::shared_ptr<Material> create_conductor_material(const ParamSet& params, cons
     smooth = r < k_smooth_roughness;
   }
 
-  auto tint = get_color_texture(params, "specular_tint", Color(1.f), ctx.textures);
-  Color avg = tint->average();
-  if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
-    throw Error("parameter 'specular_tint': components must lie in [0, 1]");
-  std::shared_ptr<Texture> bump;
-  TextureRef ref;
-  if (params.get_texture("bump_map", &ref)) {
-    bump = ctx.textures ? ctx.textures(ref.id) : nullptr;
-    if (!bump) throw Error("parameter 'bump_map': texture " + std::to_string(ref.id) + " does not exist");
-  }
-  float bump_scale = params.get_float("bump_scale", 1.f);
-  if (!(bump_scale >= -100.f && bump_scale <= 100.f)) throw Error("parameter 'bump_scale': must lie in [-100, 100]");
+  auto tint = color_texture_param(params, "specular_tint", ctx.textures);
+  std::shared_ptr<Texture> bump = texture_param(params, "bump_map", ctx.textures);
+  float bump_scale = params.get_float("bump_scale");
   return std::make_shared<ConductorMaterial>(eta, k, perfect, alpha_x, alpha_y, smooth, tint, bump, bump_scale);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

@@ -33,7 +33,7 @@
 //   white). Lobe selection uses the Fresnel terms only.
 #include <string>
 
-#include "material/material_registry.h"
+#include "material/material.h"
 #include "material/microfacet.h"
 
 namespace sg {
@@ -282,27 +282,36 @@ class DielectricMaterial final : public Material {
 
 }  // namespace
 
-std::shared_ptr<Material> create_dielectric_material(const ParamSet& params, const MaterialContext& ctx) {
-  float ior = params.get_float("ior", 1.5f);
-  float ext = params.get_float("exterior_ior", 1.f);
-  if (!(ior >= 1.f && ior <= 10.f))
-    throw Error("parameter 'ior' = " + std::to_string(ior) + " is out of range; allowed: [1, 10]");
-  if (!(ext >= 1.f && ext <= 10.f))
-    throw Error("parameter 'exterior_ior' = " + std::to_string(ext) + " is out of range; allowed: [1, 10]");
-  bool thin = params.get_bool("thin", false);
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("material", "dielectric",
+                    "Rough GGX glass (Walter et al. 2007), or a thin-walled slab (windows, car glass: no "
+                    "bending, slab reflectance); refraction scales radiance by (eta_o / eta_t)^2.")
+      .add(param::real("ior", 1.5, "index of refraction inside (must differ from exterior_ior unless thin)")
+               .in(1, 10))
+      .add(param::real("exterior_ior", 1.0, "index of refraction outside").in(1, 10))
+      .add(param::real("roughness", 0.0, "GGX roughness (0: smooth glass)").in(0, 1))
+      .add(param::boolean("thin", false, "thin-walled: no bending, slab reflectance"))
+      .add(param::color_texture("transmittance", Color(1.f), "tint of the transmitted light").in(0, 1));
+}
+
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
+  float ior = params.get_float("ior");
+  float ext = params.get_float("exterior_ior");
+  bool thin = params.get_bool("thin");
   // An index-matched interface is invisible (and its refraction half vector degenerate); a
   // thin slab of matched index is allowed (it transmits everything).
   if (!thin && std::fabs(ior - ext) < 1e-4f * ext)
     throw Error("parameters 'ior' and 'exterior_ior' must differ (an index-matched interface is invisible)");
-  float roughness = params.get_float("roughness", 0.f);
-  if (!(roughness >= 0.f && roughness <= 1.f))
-    throw Error("parameter 'roughness' = " + std::to_string(roughness) + " is out of range; allowed: [0, 1]");
-  auto transmittance = get_color_texture(params, "transmittance", Color(1.f), ctx.textures);
-  Color avg = transmittance->average();
-  if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
-    throw Error("parameter 'transmittance': components must lie in [0, 1]");
+  float roughness = params.get_float("roughness");
+  auto transmittance = color_texture_param(params, "transmittance", ctx.textures);
   return std::make_shared<DielectricMaterial>(ior / ext, roughness_to_alpha(roughness),
                                               roughness < k_smooth_roughness, thin, transmittance);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

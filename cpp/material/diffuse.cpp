@@ -6,7 +6,7 @@
 // (normal_mapping.h apply_bump_map).
 #include "material/lambert.h"
 #include "material/normal_mapping.h"
-#include "material/material_registry.h"
+#include "material/material.h"
 
 namespace sg {
 
@@ -53,33 +53,34 @@ class DiffuseMaterial final : public Material {
   float m_bump_scale = 1.f;
 };
 
-std::shared_ptr<Material> create_diffuse_material(const ParamSet& params, const MaterialContext& ctx) {
-  auto albedo = get_color_texture(params, "albedo", Color(0.5f), ctx.textures);
-  Color avg = albedo->average();
-  if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
-    throw Error("parameter 'albedo': components must lie in [0, 1]");
-  float cutoff = params.get_float("alpha_cutoff", 0.5f);
-  if (!(cutoff >= 0.f && cutoff <= 1.f))
-    throw Error("parameter 'alpha_cutoff': must lie in [0, 1], got " + std::to_string(cutoff));
-  std::shared_ptr<Texture> alpha;
-  TextureRef ref;
-  if (params.get_texture("alpha", &ref)) {
-    alpha = ctx.textures(ref.id);
-    if (!alpha) throw Error("parameter 'alpha': texture " + std::to_string(ref.id) + " does not exist");
-  } else {
-    float a = params.get_float("alpha", 1.f);
-    if (!(a >= 0.f && a <= 1.f)) throw Error("parameter 'alpha': must lie in [0, 1], got " + std::to_string(a));
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("material", "diffuse", "Lambertian reflection, with alpha cut-outs and bump mapping.")
+      .add(param::color_texture("albedo", Color(0.5f), "Lambertian reflectance").in(0, 1))
+      .add(param::float_texture("alpha", 1.0, "coverage for cut-outs (texture: its alpha channel, else the first)")
+               .in(0, 1))
+      .add(param::real("alpha_cutoff", 0.5, "hits with alpha below this are no surface").in(0, 1))
+      .add(param::texture("bump_map", "height map (first channel)"))
+      .add(param::real("bump_scale", 1.0, "height in uv units").in(-100, 100));
+}
+
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
+  auto albedo = color_texture_param(params, "albedo", ctx.textures);
+  float cutoff = params.get_float("alpha_cutoff");
+  std::shared_ptr<Texture> alpha = texture_param(params, "alpha", ctx.textures);
+  if (!alpha) {
+    float a = params.get_float("alpha");
     // A constant alpha at or above the cutoff is an opaque material: no alpha test at all.
     if (a < cutoff) alpha = make_constant_texture(Color(a));
   }
-  std::shared_ptr<Texture> bump;
-  if (params.get_texture("bump_map", &ref)) {
-    bump = ctx.textures(ref.id);
-    if (!bump) throw Error("parameter 'bump_map': texture " + std::to_string(ref.id) + " does not exist");
-  }
-  float bump_scale = params.get_float("bump_scale", 1.f);
-  if (!(bump_scale >= -100.f && bump_scale <= 100.f)) throw Error("parameter 'bump_scale': must lie in [-100, 100]");
+  std::shared_ptr<Texture> bump = texture_param(params, "bump_map", ctx.textures);
+  float bump_scale = params.get_float("bump_scale");
   return std::make_shared<DiffuseMaterial>(albedo, alpha, cutoff, bump, bump_scale);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

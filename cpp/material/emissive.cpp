@@ -4,7 +4,7 @@
 // with `albedo` (default 0), like a frosted lamp cover.
 #include "core/error.h"
 #include "material/lambert.h"
-#include "material/material_registry.h"
+#include "material/material.h"
 
 namespace sg {
 
@@ -43,13 +43,27 @@ class EmissiveMaterial final : public Material {
   bool m_reflects;
 };
 
-std::shared_ptr<Material> create_emissive_material(const ParamSet& params, const MaterialContext& ctx) {
-  Color radiance = params.get_color("radiance", Color(1.f)) * params.get_float("strength", 1.f);
-  if (radiance.x < 0.f || radiance.y < 0.f || radiance.z < 0.f)
-    throw Error("parameter 'radiance': components must be non-negative");
-  auto albedo = get_color_texture(params, "albedo", Color(0.f), ctx.textures);
-  bool two_sided = params.get_bool("two_sided", false);
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("material", "emissive",
+                    "An area light: emits `radiance` x `strength` from the front face (both with two_sided), "
+                    "plus diffuse reflection.")
+      .add(param::color("radiance", Color(1.f), "emitted radiance, W/(m^2 sr) per channel").at_least(0))
+      .add(param::real("strength", 1.0, "multiplies radiance").at_least(0))
+      .add(param::color_texture("albedo", Color(0.f), "diffuse reflectance of the emitter").in(0, 1))
+      .add(param::boolean("two_sided", false, "emit from both faces (default: the front face only)"));
+}
+
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
+  Color radiance = params.get_color("radiance") * params.get_float("strength");
+  auto albedo = color_texture_param(params, "albedo", ctx.textures);
+  bool two_sided = params.get_bool("two_sided");
   return std::make_shared<EmissiveMaterial>(radiance, albedo, two_sided);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

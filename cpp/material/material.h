@@ -15,6 +15,7 @@
 
 #include "core/math.h"
 #include "core/params.h"
+#include "core/plugin.h"
 #include "texture/texture.h"
 
 namespace sg {
@@ -262,25 +263,16 @@ class Material {
   int m_ao_samples = 0;
 };
 
-using TextureLookup = std::function<std::shared_ptr<Texture>(uint32_t id)>;
-using MaterialLookup = std::function<std::shared_ptr<Material>(uint32_t id)>;
-
 /// What a material plugin may look up while it is created: textures and (for materials
-/// made of other materials, such as "mix") materials, by id.
-struct MaterialContext {
-  TextureLookup textures;
-  MaterialLookup materials;
-};
+/// made of other materials, such as "mix") materials, by id (core/plugin.h).
+using MaterialContext = PluginContext;
 
-/// Creates a material plugin by registry key (see material/material.cpp for the list).
-/// Throws sg::Error naming `context` for unknown types, unknown or ill-typed parameters.
+/// Creates a material plugin by registry key (core/plugin.h: the parameters are checked
+/// against the plugin's declaration first). Throws sg::Error naming `context` for unknown
+/// types, unknown, ill-typed or out-of-range parameters.
 std::shared_ptr<Material> create_material(const std::string& type, const ParamSet& params,
                                           const MaterialContext& ctx, const std::string& context);
 /// Registry keys of all material plugins.
 std::vector<std::string> material_types();
-
-/// A colour parameter given either as a constant (scalar / RGB) or a TextureRef.
-std::shared_ptr<Texture> get_color_texture(const ParamSet& params, const std::string& name, const Color& def,
-                                           const TextureLookup& textures);
 
 }  // namespace sg

@@ -41,7 +41,7 @@
 
 #include "core/error.h"
 #include "core/rng.h"
-#include "material/material_registry.h"
+#include "material/material.h"
 
 namespace sg {
 
@@ -185,10 +185,8 @@ class MixMaterial final : public Material {
   bool m_emissive;
 };
 
-std::shared_ptr<Material> get_component(const ParamSet& params, const std::string& name,
-                                        const MaterialContext& ctx) {
-  if (!params.has(name)) throw Error("parameter '" + name + "' is required: the id of an existing material");
-  int64_t id = params.get_int(name, -1);
+std::shared_ptr<Material> get_component(const Params& params, const std::string& name, const PluginContext& ctx) {
+  int64_t id = params.get_int(name);
   std::shared_ptr<Material> m;
   if (id >= 0 && id <= int64_t(UINT32_MAX) && ctx.materials) m = ctx.materials(uint32_t(id));
   if (!m)
@@ -197,25 +195,29 @@ std::shared_ptr<Material> get_component(const ParamSet& params, const std::strin
   return m;
 }
 
-}  // namespace
+PluginInfo info() {
+  return PluginInfo("material", "mix",
+                    "The linear blend (1 - w) A + w B of two existing materials, w a constant or a mask texture "
+                    "(its first channel); one-sample MIS over the components.")
+      .add(param::material("material_a", "material used where weight = 0"))
+      .add(param::material("material_b", "material used where weight = 1"))
+      .add(param::float_texture("weight", 0.5, "fraction of material_b (a texture: its first channel)").in(0, 1))
+      .add(param::boolean("stochastic", false,
+                          "where 0 < weight < 1, shade secondary hits with one material chosen per point "
+                          "(probability = weight) instead of both: cheaper, a little noisier"));
+}
 
-std::shared_ptr<Material> create_mix_material(const ParamSet& params, const MaterialContext& ctx) {
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
   auto a = get_component(params, "material_a", ctx);
   auto b = get_component(params, "material_b", ctx);
-  TextureRef ref;
-  std::shared_ptr<Texture> mask;
-  float weight = 0.5f;
-  if (params.get_texture("weight", &ref)) {
-    mask = ctx.textures ? ctx.textures(ref.id) : nullptr;
-    if (!mask) throw Error("parameter 'weight': texture " + std::to_string(ref.id) + " does not exist");
-  } else {
-    weight = params.get_float("weight", 0.5f);
-    if (!(weight >= 0.f && weight <= 1.f))
-      throw Error("parameter 'weight': must lie in [0, 1] (the fraction of material_b) or be a texture, got " +
-                  std::to_string(weight));
-  }
-  bool stochastic = params.get_bool("stochastic", false);
+  std::shared_ptr<Texture> mask = texture_param(params, "weight", ctx.textures);
+  float weight = mask ? 0.5f : params.get_float("weight");
+  bool stochastic = params.get_bool("stochastic");
   return std::make_shared<MixMaterial>(std::move(a), std::move(b), weight, std::move(mask), stochastic);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

@@ -59,7 +59,7 @@
 
 #include "core/quadrature.h"
 #include "core/sampling.h"
-#include "material/material_registry.h"
+#include "material/material.h"
 #include "material/microfacet.h"
 #include "material/normal_mapping.h"
 
@@ -461,76 +461,71 @@ class PrincipledMaterial final : public Material {
   uint32_t m_flags;
 };
 
-std::string range_error(const std::string& name, float v, const char* range) {
-  return "parameter '" + name + "' = " + std::to_string(v) + " is out of range; allowed: " + range;
-}
-
-float get_float_in(const ParamSet& params, const std::string& name, float def, float lo, float hi,
-                   const char* range) {
-  float v = params.get_float(name, def);
-  if (!(v >= lo && v <= hi)) throw Error(range_error(name, v, range));
-  return v;
-}
-
-std::shared_ptr<Texture> get_texture_ref(const ParamSet& params, const std::string& name,
-                                         const MaterialContext& ctx) {
-  TextureRef ref;
-  if (!params.get_texture(name, &ref)) {
-    if (params.has(name)) throw Error("parameter '" + name + "': must be a texture reference");
-    return nullptr;
-  }
-  auto t = ctx.textures ? ctx.textures(ref.id) : nullptr;
-  if (!t) throw Error("parameter '" + name + "': texture " + std::to_string(ref.id) + " does not exist");
-  return t;
-}
-
 /// A [0, 1] scalar or a texture (its red channel, as the "mix" weight).
-ScalarInput get_scalar_input(const ParamSet& params, const std::string& name, float def,
-                             const MaterialContext& ctx) {
+ScalarInput scalar_input(const Params& params, const std::string& name, const PluginContext& ctx) {
   ScalarInput in;
-  TextureRef ref;
-  if (params.get_texture(name, &ref)) {
-    in.tex = get_texture_ref(params, name, ctx);
-    in.value = 1.f;
-  } else {
-    in.value = get_float_in(params, name, def, 0.f, 1.f, "[0, 1] or a texture");
-  }
+  in.tex = texture_param(params, name, ctx.textures);
+  in.value = in.tex ? 1.f : params.get_float(name);
   return in;
+}
+
+PluginInfo info() {
+  return PluginInfo("material", "principled",
+                    "glTF 2.0 metallic-roughness / Principled BSDF: Schlick GGX metal and GGX specular over a "
+                    "coupled Lambertian base, clear coat, rough transmission, emission, normal and bump maps, "
+                    "alpha cut-outs.")
+      .add(param::color_texture("base_color", Color(0.8f), "base colour (F0 of metals)").in(0, 1))
+      .add(param::float_texture("metallic", 0.0, "metalness (texture: its first channel)").in(0, 1))
+      .add(param::float_texture("roughness", 0.5, "GGX roughness, clamped to >= 0.03 (texture: its first channel)")
+               .in(0, 1))
+      .add(param::texture("metallic_roughness",
+                          "glTF packed texture: metallic = blue x metallic, roughness = green x roughness"))
+      .add(param::real("specular", 0.5, "dielectric F0 = 0.08 specular").in(0, 1))
+      .add(param::real("clearcoat", 0.0, "clear coat strength").in(0, 1))
+      .add(param::real("clearcoat_roughness", 0.03, "clear coat roughness").in(0, 1))
+      .add(param::real("transmission", 0.0, "rough glass fraction, tinted by base_color").in(0, 1))
+      .add(param::real("ior", 1.5, "index of refraction (transmission)").in(1.01, 3))
+      .add(param::color_texture("emission", Color(0.f), "emitted radiance (front face)").at_least(0))
+      .add(param::real("emission_strength", 1.0, "multiplies emission").in(0, 1e6))
+      .add(param::texture("normal_map", "tangent-space normal map (glTF convention, +Y up; linear)"))
+      .add(param::real("normal_scale", 1.0, "scales the normal map's X and Y").in(-10, 10))
+      .add(param::texture("bump_map", "height map (first channel)"))
+      .add(param::real("bump_scale", 1.0, "height in uv units").in(-100, 100))
+      .add(param::float_texture("alpha", 1.0, "coverage (texture: its alpha channel, else the first)").in(0, 1))
+      .add(param::real("alpha_factor", 1.0, "multiplies alpha").in(0, 1))
+      .add(param::choice("alpha_mode", "blend", {"opaque", "mask", "blend"}, "glTF alpha mode (blend: cut-out at 0.5)"))
+      .add(param::real("alpha_cutoff", 0.5, "coverage threshold of the mask mode").in(0, 1));
+}
+
+std::shared_ptr<Material> create(const Params& params, const PluginContext& ctx) {
+  PrincipledParams p;
+  p.base_color = color_texture_param(params, "base_color", ctx.textures);
+  p.metallic = scalar_input(params, "metallic", ctx);
+  p.roughness = scalar_input(params, "roughness", ctx);
+  p.metallic_roughness = texture_param(params, "metallic_roughness", ctx.textures);
+  p.specular = params.get_float("specular");
+  p.clearcoat = params.get_float("clearcoat");
+  p.clearcoat_roughness = params.get_float("clearcoat_roughness");
+  p.transmission = params.get_float("transmission");
+  p.ior = params.get_float("ior");
+  p.emission = color_texture_param(params, "emission", ctx.textures);
+  p.emission_strength = params.get_float("emission_strength");
+  p.normal_map = texture_param(params, "normal_map", ctx.textures);
+  p.normal_scale = params.get_float("normal_scale");
+  p.bump_map = texture_param(params, "bump_map", ctx.textures);
+  p.bump_scale = params.get_float("bump_scale");
+  p.alpha = scalar_input(params, "alpha", ctx);
+  p.alpha_factor = params.get_float("alpha_factor");
+  p.alpha_cutoff = params.get_float("alpha_cutoff");
+  std::string mode = params.get_string("alpha_mode");
+  p.alpha_mode = mode == "opaque" ? PrincipledParams::AlphaMode::Opaque
+                 : mode == "mask" ? PrincipledParams::AlphaMode::Mask
+                                  : PrincipledParams::AlphaMode::Blend;
+  return std::make_shared<PrincipledMaterial>(std::move(p));
 }
 
 }  // namespace
 
-std::shared_ptr<Material> create_principled_material(const ParamSet& params, const MaterialContext& ctx) {
-  PrincipledParams p;
-  p.base_color = get_color_texture(params, "base_color", Color(0.8f), ctx.textures);
-  Color avg = p.base_color->average();
-  if (avg.x < 0.f || avg.y < 0.f || avg.z < 0.f || max_component(avg) > 1.f)
-    throw Error("parameter 'base_color': components must lie in [0, 1]");
-  p.metallic = get_scalar_input(params, "metallic", 0.f, ctx);
-  p.roughness = get_scalar_input(params, "roughness", 0.5f, ctx);
-  p.metallic_roughness = get_texture_ref(params, "metallic_roughness", ctx);
-  p.specular = get_float_in(params, "specular", 0.5f, 0.f, 1.f, "[0, 1]");
-  p.clearcoat = get_float_in(params, "clearcoat", 0.f, 0.f, 1.f, "[0, 1]");
-  p.clearcoat_roughness = get_float_in(params, "clearcoat_roughness", 0.03f, 0.f, 1.f, "[0, 1]");
-  p.transmission = get_float_in(params, "transmission", 0.f, 0.f, 1.f, "[0, 1]");
-  p.ior = get_float_in(params, "ior", 1.5f, 1.01f, 3.f, "[1.01, 3]");
-  p.emission = get_color_texture(params, "emission", Color(0.f), ctx.textures);
-  Color e = p.emission->average();
-  if (e.x < 0.f || e.y < 0.f || e.z < 0.f) throw Error("parameter 'emission': components must be non-negative");
-  p.emission_strength = get_float_in(params, "emission_strength", 1.f, 0.f, 1e6f, "[0, 1e6]");
-  p.normal_map = get_texture_ref(params, "normal_map", ctx);
-  p.normal_scale = get_float_in(params, "normal_scale", 1.f, -10.f, 10.f, "[-10, 10]");
-  p.bump_map = get_texture_ref(params, "bump_map", ctx);
-  p.bump_scale = get_float_in(params, "bump_scale", 1.f, -100.f, 100.f, "[-100, 100]");
-  p.alpha = get_scalar_input(params, "alpha", 1.f, ctx);
-  p.alpha_factor = get_float_in(params, "alpha_factor", 1.f, 0.f, 1.f, "[0, 1]");
-  p.alpha_cutoff = get_float_in(params, "alpha_cutoff", 0.5f, 0.f, 1.f, "[0, 1]");
-  std::string mode = params.get_string("alpha_mode", "blend");
-  if (mode == "opaque") p.alpha_mode = PrincipledParams::AlphaMode::Opaque;
-  else if (mode == "mask") p.alpha_mode = PrincipledParams::AlphaMode::Mask;
-  else if (mode == "blend") p.alpha_mode = PrincipledParams::AlphaMode::Blend;
-  else throw Error("parameter 'alpha_mode': unknown mode '" + mode + "'; allowed: opaque, mask, blend");
-  return std::make_shared<PrincipledMaterial>(std::move(p));
-}
+SG_REGISTER_PLUGIN(Material, info(), create)
 
 }  // namespace sg

@@ -7,7 +7,6 @@
 // Parameters (defaults): radius (0.2 m), samples (4), remap ([0, 1]), smooth, invert,
 // ramp_positions / ramp_colors. Outside path tracing (no AO computed) the value is 1.
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -35,12 +34,26 @@ class AoTexture final : public PointTexture {
 
 }  // namespace
 
-std::shared_ptr<Texture> create_ao_texture(const ParamSet& params) {
-  float radius = params.get_float("radius", 0.2f);
-  if (!(radius > 0.f && radius <= 1e4f)) throw Error("parameter 'radius': must lie in (0, 1e4]");
-  int64_t samples = params.get_int("samples", 4);
-  if (samples < 1 || samples > 64) throw Error("parameter 'samples': must lie in [1, 64]");
+namespace {
+
+PluginInfo info() {
+  PluginInfo i("texture", "ao",
+               "Ambient occlusion at the shading point: the fraction of `samples` short rays of length `radius` "
+               "that escape (1 in the open, lower in creases), shaped like the procedural textures.");
+  i.add(param::real("radius", 0.2, "ray length in metres").above(0).at_most(1e4))
+      .add(param::integer("samples", 4, "rays per shading point").in(1, 64));
+  ProceduralShaping::declare(i, Vec2f(0.f, 1.f));
+  return i;
+}
+
+std::shared_ptr<Texture> create(const Params& params, const PluginContext&) {
+  float radius = params.get_float("radius");
+  int64_t samples = params.get_int("samples");
   return std::make_shared<AoTexture>(radius, int(samples), ProceduralShaping::from_params(params, Vec2f(0.f, 1.f)));
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

@@ -10,7 +10,6 @@
 #include <algorithm>
 
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -69,46 +68,43 @@ class BlendTexture final : public PointTexture {
   Color m_average;
 };
 
-std::shared_ptr<Texture> input(const ParamSet& params, const std::string& name, const Color& def,
-                               const TextureInputs& inputs) {
-  TextureRef ref;
-  if (params.get_texture(name, &ref)) {
-    std::shared_ptr<Texture> t = inputs ? inputs(ref.id) : nullptr;
-    if (!t) throw Error("parameter '" + name + "': texture " + std::to_string(ref.id) + " does not exist");
-    return t;
-  }
-  return make_constant_texture(params.get_color(name, def));
+const std::vector<std::pair<std::string, BlendOp>> k_ops = {
+    {"mix", BlendOp::Mix}, {"add", BlendOp::Add}, {"subtract", BlendOp::Subtract}, {"multiply", BlendOp::Multiply},
+    {"min", BlendOp::Min}, {"max", BlendOp::Max}, {"screen", BlendOp::Screen}, {"difference", BlendOp::Difference}};
+
+PluginInfo info() {
+  std::vector<std::string> ops;
+  for (const auto& o : k_ops) ops.push_back(o.first);
+  PluginInfo i("texture", "blend",
+               "Combines two inputs (colours or textures) with a blend operation, then optionally shapes the "
+               "result like the procedural textures (only when `remap` or a ramp is given: the first channel is "
+               "remapped and coloured).");
+  i.add(param::color_texture("a", Color(0.f), "first input"))
+      .add(param::color_texture("b", Color(0.f), "second input"))
+      .add(param::choice("op", "mix", ops, "mix: (1 - f) a + f b; the others: a op (f b)"))
+      .add(param::color_texture("factor", Color(0.5f), "blend factor f (a number, colour or texture)"));
+  ProceduralShaping::declare(i, Vec2f(0.f, 1.f));
+  return i;
 }
 
-}  // namespace
-
-std::shared_ptr<Texture> create_blend_texture(const ParamSet& params, const TextureInputs& inputs) {
-  auto a = input(params, "a", Color(0.f), inputs);
-  auto b = input(params, "b", Color(0.f), inputs);
-  auto f = input(params, "factor", Color(0.5f), inputs);
-  const std::vector<std::pair<std::string, BlendOp>> ops = {
-      {"mix", BlendOp::Mix}, {"add", BlendOp::Add}, {"subtract", BlendOp::Subtract}, {"multiply", BlendOp::Multiply},
-      {"min", BlendOp::Min}, {"max", BlendOp::Max}, {"screen", BlendOp::Screen}, {"difference", BlendOp::Difference}};
-  std::string name = params.get_string("op", "mix");
+std::shared_ptr<Texture> create(const Params& params, const PluginContext& ctx) {
+  auto a = color_texture_param(params, "a", ctx.textures);
+  auto b = color_texture_param(params, "b", ctx.textures);
+  auto f = color_texture_param(params, "factor", ctx.textures);
+  std::string name = params.get_string("op");
   BlendOp op = BlendOp::Mix;
-  bool found = false;
-  std::vector<std::string> names;
-  for (const auto& o : ops) {
-    names.push_back(o.first);
-    if (o.first == name) {
-      op = o.second;
-      found = true;
-    }
-  }
-  if (!found) {
-    std::string g = closest_match(name, names);
-    throw Error("parameter 'op': unknown operation '" + name + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
-                "; allowed: mix, add, subtract, multiply, min, max, screen, difference");
-  }
-  bool shape = params.has("remap") || params.has("ramp_positions") || params.has("ramp_colors");
+  for (const auto& o : k_ops)
+    if (o.first == name) op = o.second;
+  // Shaping applies when any of its parameters is given (e.g. `invert` alone inverts the
+  // blended value over the default remap [0, 1]).
+  bool shape = params.has("remap") || params.has("ramp_positions") || params.has("smooth") || params.has("invert");
   ProceduralShaping shaping;
   if (shape) shaping = ProceduralShaping::from_params(params, Vec2f(0.f, 1.f));
   return std::make_shared<BlendTexture>(std::move(a), std::move(b), std::move(f), op, shape, std::move(shaping));
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

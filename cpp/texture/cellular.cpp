@@ -7,7 +7,6 @@
 // remap [lo, hi] -> [0, 1] (default [0, 1]), smooth, invert, ramp_positions / ramp_colors;
 // band_limit true: where the footprint covers a cell or more, the value fades to its mean.
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -72,26 +71,38 @@ class CellularTexture final : public PointTexture {
 
 }  // namespace
 
-std::shared_ptr<Texture> create_cellular_texture(const ParamSet& params) {
-  std::string o = params.get_string("output", "f1");
-  CellularTexture::Output out;
-  if (o == "f1") out = CellularTexture::Output::F1;
-  else if (o == "f2") out = CellularTexture::Output::F2;
-  else if (o == "f2_minus_f1") out = CellularTexture::Output::F2MinusF1;
-  else if (o == "edge") out = CellularTexture::Output::Edge;
-  else if (o == "cell") out = CellularTexture::Output::Cell;
-  else {
-    std::string g = closest_match(o, {"f1", "f2", "f2_minus_f1", "edge", "cell"});
-    throw Error("parameter 'output': unknown output '" + o + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
-                "; allowed: f1, f2, f2_minus_f1, edge, cell");
-  }
-  float jitter = params.get_float("jitter", 1.f);
-  if (!(jitter >= 0.f && jitter <= 1.f)) throw Error("parameter 'jitter': must lie in [0, 1]");
-  int64_t seed = params.get_int("seed", 0);
+namespace {
+
+PluginInfo info() {
+  PluginInfo i("texture", "cellular",
+               "Worley (cellular) noise: F1, F2, F2 - F1 (crack-like ridges), the exact distance to the nearest "
+               "cell edge, or a random value per cell, through a mapping and a colour ramp.");
+  i.add(param::choice("output", "f1", {"f1", "f2", "f2_minus_f1", "edge", "cell"}, "what the texture returns"))
+      .add(param::real("jitter", 1.0, "feature point jitter (0: a regular grid)").in(0, 1))
+      .add(param::integer("seed", 0, "pattern seed").at_least(0))
+      .add(ProceduralMapping::params("object"));
+  ProceduralShaping::declare(i, Vec2f(0.f, 1.f));
+  i.add(param::boolean("band_limit", true, "where the footprint covers a cell or more, fade to the mean"));
+  return i;
+}
+
+std::shared_ptr<Texture> create(const Params& params, const PluginContext&) {
+  std::string o = params.get_string("output");
+  CellularTexture::Output out = o == "f2"            ? CellularTexture::Output::F2
+                                : o == "f2_minus_f1" ? CellularTexture::Output::F2MinusF1
+                                : o == "edge"        ? CellularTexture::Output::Edge
+                                : o == "cell"        ? CellularTexture::Output::Cell
+                                                     : CellularTexture::Output::F1;
+  float jitter = params.get_float("jitter");
+  int64_t seed = params.get_int("seed");
   ProceduralMapping mapping = ProceduralMapping::from_params(params);
   ProceduralShaping shaping = ProceduralShaping::from_params(params, Vec2f(0.f, 1.f));
-  bool band_limit = params.get_bool("band_limit", true);
+  bool band_limit = params.get_bool("band_limit");
   return std::make_shared<CellularTexture>(out, jitter, uint64_t(seed), mapping, std::move(shaping), band_limit);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

@@ -1,7 +1,6 @@
 // Texture "constant": the same value everywhere.
 #include "core/error.h"
 #include "texture/texture.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -20,8 +19,14 @@ std::shared_ptr<Texture> make_constant_texture(const Color& value) {
   return std::make_shared<ConstantTexture>(value);
 }
 
-std::shared_ptr<Texture> create_constant_texture(const ParamSet& params) {
-  return make_constant_texture(params.get_color("value", Color(1.f)));
+namespace {
+PluginInfo info() {
+  return PluginInfo("texture", "constant", "The same value everywhere.")
+      .add(param::color("value", Color(1.f), "the constant colour"));
 }
+std::shared_ptr<Texture> create(const Params& p, const PluginContext&) { return make_constant_texture(p.get_color("value")); }
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

@@ -6,7 +6,6 @@
 // scale, offset; remap [lo, hi] -> [0, 1] ([0, 1]), smooth, invert; ramp_positions /
 // ramp_colors.
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -37,12 +36,26 @@ class GradientTexture final : public PointTexture {
 
 }  // namespace
 
-std::shared_ptr<Texture> create_gradient_texture(const ParamSet& params) {
-  std::string a = params.get_string("axis", "y");
-  if (a != "x" && a != "y" && a != "z") throw Error("parameter 'axis': must be x, y or z, got '" + a + "'");
-  ProceduralMapping mapping = ProceduralMapping::from_params(params, "relative");
+namespace {
+
+PluginInfo info() {
+  PluginInfo i("texture", "gradient",
+               "One coordinate of a mapping as a value, shaped like the procedural textures: e.g. relative-local "
+               "height (mapping relative, axis y) confines rust or dirt to the lower part of any model.");
+  i.add(param::choice("axis", "y", {"x", "y", "z"}, "the coordinate used")).add(ProceduralMapping::params("relative"));
+  ProceduralShaping::declare(i, Vec2f(0.f, 1.f));
+  return i;
+}
+
+std::shared_ptr<Texture> create(const Params& params, const PluginContext&) {
+  std::string a = params.get_string("axis");
+  ProceduralMapping mapping = ProceduralMapping::from_params(params);
   ProceduralShaping shaping = ProceduralShaping::from_params(params, Vec2f(0.f, 1.f));
   return std::make_shared<GradientTexture>(a == "x" ? 0 : (a == "y" ? 1 : 2), mapping, std::move(shaping));
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

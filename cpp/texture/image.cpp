@@ -16,7 +16,6 @@
 #include "texture/image_cache.h"
 #include "texture/mipmap.h"
 #include "texture/texture.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -107,29 +106,43 @@ std::shared_ptr<Texture> make_image_texture(const ImageData& pixels, const Color
   return make_image_texture(std::make_shared<const MipMap>(pixels), o);
 }
 
-std::shared_ptr<Texture> create_image_texture(const ParamSet& params, ImageCache* images) {
-  const std::string ctx = "image texture";
-  std::string filename = params.get_string("filename", "");
-  if (filename.empty()) throw Error(ctx + ": parameter 'filename' is required");
-  std::string cs = params.get_string("colorspace", "auto");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("texture", "image",
+                    "An image file read through OpenImageIO (or pixels given from memory with "
+                    "Scene.add_image_texture), mip-mapped and filtered over the ray footprint.")
+      .add(param::path("filename", "image file read by OpenImageIO (relative to the scene file in YAML)").alias("file"))
+      .add(param::choice("colorspace", "auto", {"auto", "srgb", "linear"},
+                         "how to decode the pixels (auto: 8/16-bit images are sRGB)"))
+      .add(param::choice("wrap", "repeat", {"repeat", "clamp", "mirror"}, "behaviour outside [0, 1] uv"))
+      .add(param::color("scale", Color(1.f), "multiplies the texel values"))
+      .add(param::vec2("uv_scale", Vec2f(1.f, 1.f), "uv scale S in uv' = R S uv + offset (non-zero)"))
+      .add(param::vec2("uv_offset", Vec2f(0.f, 0.f), "uv offset, applied last"))
+      .add(param::real("uv_rotation", 0.0, "counter-clockwise uv rotation in degrees, after scaling"));
+}
+
+std::shared_ptr<Texture> create(const Params& p, const PluginContext& ctx) {
+  std::string filename = p.get_string("filename");
+  std::string cs = p.get_string("colorspace");
   ImageTextureOptions o;
-  o.wrap = parse_wrap_mode(params.get_string("wrap", "repeat"), ctx);
-  o.scale = params.get_color("scale", Color(1.f));
-  o.uv_scale = params.get_vec2("uv_scale", Vec2f(1.f, 1.f));
+  o.wrap = parse_wrap_mode(p.get_string("wrap"), "image texture");
+  o.scale = p.get_color("scale");
+  o.uv_scale = p.get_vec2("uv_scale");
   if (o.uv_scale.x == 0.f || o.uv_scale.y == 0.f)
-    throw Error(ctx + ": 'uv_scale' must be a non-zero number or two non-zero numbers, got " +
+    throw Error("parameter 'uv_scale': must be a non-zero number or two non-zero numbers, got " +
                 format_vec2(o.uv_scale));
-  o.uv_offset = params.get_vec2("uv_offset", Vec2f(0.f, 0.f));
-  o.uv_rotation_degrees = params.get_float("uv_rotation", 0.f);
-  ColorSpace space;
-  if (cs == "auto") space = ColorSpace::Auto;
-  else if (cs == "srgb") space = ColorSpace::SRGB;
-  else if (cs == "linear") space = ColorSpace::Linear;
-  else throw Error(ctx + ": 'colorspace' must be auto, srgb or linear, got '" + cs + "'");
+  o.uv_offset = p.get_vec2("uv_offset");
+  o.uv_rotation_degrees = p.get_float("uv_rotation");
+  ColorSpace space = cs == "srgb" ? ColorSpace::SRGB : (cs == "linear" ? ColorSpace::Linear : ColorSpace::Auto);
   // Without a scene cache (standalone use), the texture owns its pyramid.
-  std::shared_ptr<const MipMap> mip =
-      images ? images->get(filename, space) : std::make_shared<const MipMap>(load_image(filename, space));
+  std::shared_ptr<const MipMap> mip = ctx.images ? ctx.images->get(filename, space)
+                                                 : std::make_shared<const MipMap>(load_image(filename, space));
   return make_image_texture(std::move(mip), o);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

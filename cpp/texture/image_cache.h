@@ -35,6 +35,15 @@ class ImageCache {
   /// Cache key of a path: absolute, with ".", ".." and symbolic links resolved.
   static std::string resolve(const std::string& path);
 
+  /// Registers decoded pixels held in memory and returns their key ("memory:" and a hash
+  /// of the content), which get() then accepts as a path. Identical pixels get the same
+  /// key (one pyramid). The cache keeps only a weak reference: the caller keeps the
+  /// pixels alive while textures may be created from the key. `integer_source`: the
+  /// values came from 8/16-bit integers, so ColorSpace::Auto decodes them as sRGB (as for
+  /// such files); otherwise Auto means linear.
+  std::string add_memory(std::shared_ptr<const ImageData> pixels, bool integer_source);
+  static bool is_memory_key(const std::string& path) { return path.rfind("memory:", 0) == 0; }
+
   uint64_t loads() const;  ///< files decoded so far
   uint64_t hits() const;   ///< requests served without decoding
 
@@ -44,8 +53,13 @@ class ImageCache {
     int64_t mtime = 0;
     int64_t size = -1;
   };
+  struct Memory {
+    std::weak_ptr<const ImageData> pixels;
+    bool integer_source = false;
+  };
   Loader m_loader;
   std::map<std::pair<std::string, int>, Entry> m_entries;
+  std::map<std::string, Memory> m_memory;
   uint64_t m_loads = 0, m_hits = 0;
   mutable std::mutex m_mutex;
 };

@@ -8,7 +8,6 @@
 // turbulence) -> [0, 1], smooth false, invert false; ramp_positions / ramp_colors (a colour
 // map; grey without); band_limit true.
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -79,34 +78,47 @@ class NoiseTexture final : public PointTexture {
 
 }  // namespace
 
-std::shared_ptr<Texture> create_noise_texture(const ParamSet& params) {
-  std::string pat = params.get_string("pattern", "fbm");
-  NoiseTexture::Pattern pattern;
-  if (pat == "fbm") pattern = NoiseTexture::Pattern::Fbm;
-  else if (pat == "turbulence") pattern = NoiseTexture::Pattern::Turbulence;
-  else if (pat == "plain") pattern = NoiseTexture::Pattern::Plain;
-  else {
-    std::string g = closest_match(pat, {"fbm", "turbulence", "plain"});
-    throw Error("parameter 'pattern': unknown pattern '" + pat + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
-                "; allowed: fbm, turbulence, plain");
-  }
-  std::string b = params.get_string("basis", "perlin");
-  if (b != "perlin" && b != "value") throw Error("parameter 'basis': must be perlin or value, got '" + b + "'");
+namespace {
+
+PluginInfo info() {
+  PluginInfo i("texture", "noise",
+               "Perlin or value noise, plain, as a fractal sum (fBm) or as turbulence, band-limited by the ray "
+               "footprint, through a texture-coordinate mapping and a colour ramp.");
+  i.add(param::choice("pattern", "fbm", {"fbm", "turbulence", "plain"}, "fractal sum, sum of |noise|, or one octave"))
+      .add(param::choice("basis", "perlin", {"perlin", "value"}, "gradient (Perlin) or value noise"))
+      .add(param::integer("octaves", 5, "fractal octaves").in(1, 16))
+      .add(param::real("lacunarity", 2.0, "frequency ratio of successive octaves").above(1).at_most(16))
+      .add(param::real("H", 1.0, "octave weights lacunarity^(-H i)").in(0, 4))
+      .add(param::boolean("normalize", true, "divide the fractal sum by the sum of its weights"))
+      .add(param::integer("seed", 0, "pattern seed").at_least(0))
+      .add(ProceduralMapping::params("object"));
+  ProceduralShaping::declare(i, std::nullopt, "[-1, 1] for fbm and plain, [0, 1] for turbulence");
+  i.add(param::boolean("band_limit", true, "fade octaves finer than the ray footprint to their mean"));
+  return i;
+}
+
+std::shared_ptr<Texture> create(const Params& params, const PluginContext&) {
+  std::string pat = params.get_string("pattern");
+  NoiseTexture::Pattern pattern = pat == "turbulence" ? NoiseTexture::Pattern::Turbulence
+                                  : pat == "plain"    ? NoiseTexture::Pattern::Plain
+                                                      : NoiseTexture::Pattern::Fbm;
+  std::string b = params.get_string("basis");
   FractalParams f;
-  f.octaves = int(params.get_int("octaves", 5));
-  f.lacunarity = params.get_float("lacunarity", 2.f);
-  f.H = params.get_float("H", 1.f);
-  f.normalize = params.get_bool("normalize", true);
-  if (f.octaves < 1 || f.octaves > 16) throw Error("parameter 'octaves': must lie in [1, 16]");
-  if (!(f.lacunarity > 1.f && f.lacunarity <= 16.f)) throw Error("parameter 'lacunarity': must lie in (1, 16]");
-  if (!(f.H >= 0.f && f.H <= 4.f)) throw Error("parameter 'H': must lie in [0, 4]");
-  int64_t seed = params.get_int("seed", 0);
+  f.octaves = int(params.get_int("octaves"));
+  f.lacunarity = params.get_float("lacunarity");
+  f.H = params.get_float("H");
+  f.normalize = params.get_bool("normalize");
+  int64_t seed = params.get_int("seed");
   ProceduralMapping mapping = ProceduralMapping::from_params(params);
   Vec2f range = pattern == NoiseTexture::Pattern::Turbulence ? Vec2f(0.f, 1.f) : Vec2f(-1.f, 1.f);
   ProceduralShaping shaping = ProceduralShaping::from_params(params, range);
-  bool band_limit = params.get_bool("band_limit", true);
+  bool band_limit = params.get_bool("band_limit");
   return std::make_shared<NoiseTexture>(pattern, b == "perlin" ? NoiseKind::Perlin : NoiseKind::Value, f,
                                         uint64_t(seed), mapping, std::move(shaping), band_limit);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

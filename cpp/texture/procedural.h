@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
 #include "core/noise.h"
 #include "core/params.h"
+#include "core/plugin.h"
 #include "texture/texture.h"
 
 namespace sg {
@@ -25,21 +27,21 @@ struct ProceduralMapping {
   enum class Kind { UV, Object, World, Relative } kind = Kind::Object;
   Vec3f scale{1.f}, offset{0.f};
 
-  static ProceduralMapping from_params(const ParamSet& p, const std::string& default_kind = "object") {
+  /// The declared parameters `mapping`, `scale`, `offset`.
+  static std::vector<ParamDecl> params(const std::string& default_kind = "object") {
+    return {param::choice("mapping", default_kind, {"uv", "object", "world", "relative"},
+                          "texture coordinates: uv, object- or world-space position, or relative-local "
+                          "(object position / bounding-box extent, in [0, 1])"),
+            param::vec3("scale", Vec3f(1.f), "multiplies the coordinates (a number or one per axis)").above(0),
+            param::vec3("offset", Vec3f(0.f), "added after scaling")};
+  }
+
+  static ProceduralMapping from_params(const Params& p) {
     ProceduralMapping m;
-    std::string k = p.get_string("mapping", default_kind);
-    if (k == "uv") m.kind = Kind::UV;
-    else if (k == "object") m.kind = Kind::Object;
-    else if (k == "world") m.kind = Kind::World;
-    else if (k == "relative") m.kind = Kind::Relative;
-    else {
-      std::string g = closest_match(k, {"uv", "object", "world", "relative"});
-      throw Error("parameter 'mapping': unknown mapping '" + k + "'" + (g.empty() ? "" : " (did you mean '" + g + "'?)") +
-                  "; allowed: uv, object, world, relative");
-    }
-    m.scale = p.get_vec3("scale", Vec3f(1.f));
-    m.offset = p.get_vec3("offset", Vec3f(0.f));
-    if (!(m.scale.x > 0.f && m.scale.y > 0.f && m.scale.z > 0.f)) throw Error("parameter 'scale': must be positive");
+    std::string k = p.get_string("mapping");
+    m.kind = k == "uv" ? Kind::UV : k == "world" ? Kind::World : k == "relative" ? Kind::Relative : Kind::Object;
+    m.scale = p.get_vec3("scale");
+    m.offset = p.get_vec3("offset");
     return m;
   }
 
@@ -116,18 +118,35 @@ struct ProceduralShaping {
   bool invert = false;
   ColorRamp ramp;
 
-  static ProceduralShaping from_params(const ParamSet& p, Vec2f default_range) {
+  /// Declares `remap` (default `default_range`, or described by `default_doc` when it
+  /// depends on other parameters), `smooth`, `invert`, `ramp_positions`, `ramp_colors`.
+  static PluginInfo& declare(PluginInfo& info, std::optional<Vec2f> default_range, const std::string& default_doc = "") {
+    ParamDecl remap = default_range ? param::vec2("remap", *default_range, "input range [lo, hi] mapped to [0, 1]")
+                                    : param::vec2("remap", Vec2f(0.f, 1.f), "input range [lo, hi] mapped to [0, 1]");
+    if (!default_range) {
+      remap.has_default = false;
+      remap.default_is(default_doc);
+    }
+    info.add(remap)
+        .add(param::boolean("smooth", false, "smoothstep instead of a linear remap"))
+        .add(param::boolean("invert", false, "1 - the remapped value"))
+        .add(param::floats("ramp_positions", "colour ramp: increasing positions in [0, 1]").in(0, 1))
+        .add(param::floats("ramp_colors", "colour ramp: r, g, b per position (grey without a ramp)"))
+        .requires_all("ramp_positions", {"ramp_colors"})
+        .requires_all("ramp_colors", {"ramp_positions"});
+    return info;
+  }
+
+  static ProceduralShaping from_params(const Params& p, Vec2f default_range) {
     ProceduralShaping s;
-    Vec2f r = p.get_vec2("remap", default_range);
+    Vec2f r = p.has("remap") ? p.get_vec2("remap") : default_range;
     s.lo = r.x;
     s.hi = r.y;
     if (!(s.hi != s.lo)) throw Error("parameter 'remap': the two ends must differ");
     s.inv_range = 1.f / (s.hi - s.lo);
-    s.smooth = p.get_bool("smooth", false);
-    s.invert = p.get_bool("invert", false);
-    bool has_pos = p.has("ramp_positions"), has_col = p.has("ramp_colors");
-    if (has_pos != has_col) throw Error("parameters 'ramp_positions' and 'ramp_colors' go together");
-    if (has_pos) {
+    s.smooth = p.get_bool("smooth");
+    s.invert = p.get_bool("invert");
+    if (p.has("ramp_positions")) {
       std::vector<float> pos = p.get_floats("ramp_positions");
       std::vector<float> flat = p.get_floats("ramp_colors");
       if (flat.size() != 3 * pos.size())

@@ -30,7 +30,6 @@
 #include <array>
 
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -100,21 +99,49 @@ class ProjectorTexture final : public PointTexture {
 
 }  // namespace
 
-std::shared_ptr<Texture> create_projector_texture(const ParamSet& params, const TextureInputs& inputs) {
-  TextureRef ref;
-  if (!params.get_texture("texture", &ref)) throw Error("parameter 'texture': a texture reference is required");
-  std::shared_ptr<Texture> tex = inputs ? inputs(ref.id) : nullptr;
-  if (!tex) throw Error("parameter 'texture': texture " + std::to_string(ref.id) + " does not exist");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("texture", "projector",
+                    "Projective texture mapping: a pinhole projector (a pose and intrinsics, like a camera) "
+                    "projects another texture onto whatever it faces: decals, stickers, graffiti, stripes.")
+      .add(param::texture("texture", "the projected texture (an image or a procedural one)").require())
+      .add(param::matrix4("world_from_projector",
+                          "projector pose, row-major 4x4 (looks along +z, x right, y down: OpenCV)"))
+      .add(param::vec3("position", "projector position (with look_at and up, instead of world_from_projector)"))
+      .add(param::vec3("look_at", Vec3f(0.f, 0.f, 1.f), "point the projector looks at"))
+      .add(param::vec3("up", Vec3f(0.f, 1.f, 0.f), "up direction of the projected image"))
+      .add(param::real("fov", 40.0, "vertical field of view in degrees").above(0).below(179))
+      .add(param::real("fx", "focal length in pixels (instead of fov)").above(0))
+      .add(param::real("fy", "focal length along y in pixels").above(0).default_is("fx"))
+      .add(param::real("cx", "principal point x in pixels").default_is("width / 2"))
+      .add(param::real("cy", "principal point y in pixels").default_is("height / 2"))
+      .add(param::real("width", 1.0, "projected image width in pixels (with fov only the aspect matters)").above(0))
+      .add(param::real("height", 1.0, "projected image height in pixels").above(0))
+      .add(param::choice("space", "world", {"world", "object"}, "object: the projector moves with each object"))
+      .add(param::choice("output", "color", {"color", "mask"},
+                         "color: the texture inside the frustum, `outside` elsewhere; mask: 1 inside, 0 outside"))
+      .add(param::color("outside", Color(0.f), "colour outside the frustum"))
+      .add(param::texture("depth_map", "shadow map: projector-space depth of the first surface per projected pixel"))
+      .add(param::real("depth_bias", 0.01, "occlusion tolerance in metres (+1% of the depth)").at_least(0))
+      .add(param::boolean("facing", false, "only surfaces whose normal faces the projector are inside"))
+      .exactly_one_of({"world_from_projector", "position"})
+      .exclusive_of({"world_from_projector"}, {"look_at", "up"})
+      .exclusive_of({"fov"}, {"fx", "fy", "cx", "cy"})
+      .requires_all("fy", {"fx"})
+      .requires_all("cx", {"fx"})
+      .requires_all("cy", {"fx"});
+}
+
+std::shared_ptr<Texture> create(const Params& params, const PluginContext& ctx) {
+  std::shared_ptr<Texture> tex = texture_param(params, "texture", ctx.textures);
   Transform T;
-  bool has_matrix = params.has("world_from_projector"), has_look = params.has("position");
-  if (has_matrix && has_look) throw Error("give either 'world_from_projector' or 'position'/'look_at', not both");
-  if (has_matrix) {
+  if (params.has("world_from_projector")) {
     std::vector<float> m = params.get_floats("world_from_projector");
-    if (m.size() != 16) throw Error("parameter 'world_from_projector': needs 16 numbers (row-major 4x4)");
     T = Transform::from_row_major(m.data(), "world_from_projector");
-  } else if (has_look) {
-    Vec3f eye = params.get_vec3("position", Vec3f(0.f)), at = params.get_vec3("look_at", Vec3f(0.f, 0.f, 1.f));
-    Vec3f up = params.get_vec3("up", Vec3f(0.f, 1.f, 0.f));
+  } else {
+    Vec3f eye = params.get_vec3("position"), at = params.get_vec3("look_at");
+    Vec3f up = params.get_vec3("up");
     Vec3f z = at - eye;
     if (!(length(z) > 0.f)) throw Error("parameters 'position' and 'look_at' must differ");
     z = normalize(z);
@@ -124,40 +151,32 @@ std::shared_ptr<Texture> create_projector_texture(const ParamSet& params, const 
     Vec3f y = cross(z, x);
     float m[16] = {x.x, y.x, z.x, eye.x, x.y, y.y, z.y, eye.y, x.z, y.z, z.z, eye.z, 0, 0, 0, 1};
     T = Transform::from_row_major(m, "projector look_at");
-  } else {
-    throw Error("the projector needs a pose: 'world_from_projector' or 'position' and 'look_at'");
   }
-  float w = params.get_float("width", 1.f), h = params.get_float("height", 1.f);
-  if (!(w > 0.f && h > 0.f)) throw Error("parameters 'width' and 'height' must be positive");
+  float w = params.get_float("width"), h = params.get_float("height");
   float fx, fy, cx, cy;
   if (params.has("fx")) {
-    fx = params.get_float("fx", 1.f);
-    fy = params.get_float("fy", fx);
-    cx = params.get_float("cx", 0.5f * w);
-    cy = params.get_float("cy", 0.5f * h);
-    if (!(fx > 0.f && fy > 0.f)) throw Error("parameters 'fx' and 'fy' must be positive");
+    fx = params.get_float("fx");
+    fy = params.get_float_or("fy", fx);
+    cx = params.get_float_or("cx", 0.5f * w);
+    cy = params.get_float_or("cy", 0.5f * h);
   } else {
-    float fov = params.get_float("fov", 40.f);
-    if (!(fov > 0.f && fov < 179.f)) throw Error("parameter 'fov': must lie in (0, 179) degrees");
+    float fov = params.get_float("fov");
     fy = fx = 0.5f * h / std::tan(0.5f * fov * k_pi / 180.f);
     cx = 0.5f * w;
     cy = 0.5f * h;
   }
-  std::string space = params.get_string("space", "world");
-  if (space != "world" && space != "object") throw Error("parameter 'space': must be world or object");
-  std::string output = params.get_string("output", "color");
-  if (output != "color" && output != "mask") throw Error("parameter 'output': must be color or mask");
-  Color outside = params.get_color("outside", Color(0.f));
-  std::shared_ptr<Texture> depth;
-  if (params.get_texture("depth_map", &ref)) {
-    depth = inputs ? inputs(ref.id) : nullptr;
-    if (!depth) throw Error("parameter 'depth_map': texture " + std::to_string(ref.id) + " does not exist");
-  }
-  float bias = params.get_float("depth_bias", 0.01f);
-  if (!(bias >= 0.f)) throw Error("parameter 'depth_bias': must be >= 0");
-  bool facing = params.get_bool("facing", false);
+  std::string space = params.get_string("space");
+  std::string output = params.get_string("output");
+  Color outside = params.get_color("outside");
+  std::shared_ptr<Texture> depth = texture_param(params, "depth_map", ctx.textures);
+  float bias = params.get_float("depth_bias");
+  bool facing = params.get_bool("facing");
   return std::make_shared<ProjectorTexture>(std::move(tex), T, fx, fy, cx, cy, w, h, space == "object",
                                             output == "mask", outside, std::move(depth), bias, facing);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

@@ -1,32 +1,37 @@
 #include "texture/texture.h"
 
 #include "core/error.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
 std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet& params,
                                         const std::string& context, ImageCache* images,
                                         const TextureInputs& inputs) {
-  std::shared_ptr<Texture> t;
-  if (type == "constant") t = create_constant_texture(params);
-  else if (type == "image") t = create_image_texture(params, images);
-  else if (type == "noise") t = create_noise_texture(params);
-  else if (type == "cellular") t = create_cellular_texture(params);
-  else if (type == "blend") t = create_blend_texture(params, inputs);
-  else if (type == "gradient") t = create_gradient_texture(params);
-  else if (type == "projector") t = create_projector_texture(params, inputs);
-  else if (type == "ao") t = create_ao_texture(params);
-  else if (type == "triplanar") t = create_triplanar_texture(params, inputs);
-  else {
-    std::string guess = closest_match(
-        type, {"ao", "blend", "cellular", "constant", "gradient", "image", "noise", "projector", "triplanar"});
-    throw Error(context + ": unknown texture type '" + type + "'" +
-                (guess.empty() ? "" : " (did you mean '" + guess + "'?)") +
-                "; known types: ao, blend, cellular, constant, gradient, image, noise, projector, triplanar");
-  }
-  params.check_unused(context + " (texture '" + type + "')");
+  PluginContext ctx{inputs, nullptr, images};
+  return Registry::instance().create<Texture>("texture", type, params, ctx, context);
+}
+
+std::vector<std::string> texture_types() { return Registry::instance().names("texture"); }
+
+std::shared_ptr<Texture> texture_param(const Params& p, const std::string& name, const TextureLookup& lookup) {
+  TextureRef ref;
+  if (!p.get_texture(name, &ref)) return nullptr;
+  auto t = lookup ? lookup(ref.id) : nullptr;
+  if (!t) throw Error("parameter '" + name + "': texture " + std::to_string(ref.id) + " does not exist");
   return t;
+}
+
+std::shared_ptr<Texture> color_texture_param(const Params& p, const std::string& name, const TextureLookup& lookup) {
+  if (auto t = texture_param(p, name, lookup)) {
+    const ParamDecl* d = p.info().find(name);
+    Color avg = t->average();
+    for (int c = 0; c < 3; ++c)
+      if (d && !d->in_range(avg[c]))
+        throw Error("parameter '" + name + "': components of the texture's average must lie in " + d->range_text() +
+                    ", got " + format_number(avg[c]));
+    return t;
+  }
+  return make_constant_texture(p.get_color(name));
 }
 
 }  // namespace sg

@@ -7,9 +7,11 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/math.h"
 #include "core/params.h"
+#include "core/plugin.h"
 
 namespace sg {
 
@@ -98,10 +100,10 @@ class PointTexture : public Texture {
   }
 };
 
-class ImageCache;
 /// Texture library lookup for textures built from other textures ("blend"); null when absent.
-using TextureInputs = std::function<std::shared_ptr<Texture>(uint32_t id)>;
-/// Creates a texture plugin by registry key. Image files are decoded through `images`
+using TextureInputs = TextureLookup;
+/// Creates a texture plugin by registry key (core/plugin.h: the parameters are checked
+/// against the plugin's declaration first). Image files are decoded through `images`
 /// (the scene's shared cache, texture/image_cache.h; null = a private copy); `inputs`
 /// resolves texture references of composite textures (textures are immutable once added,
 /// so a reference always sees the same texture).
@@ -109,6 +111,16 @@ using TextureInputs = std::function<std::shared_ptr<Texture>(uint32_t id)>;
 std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet& params,
                                         const std::string& context, ImageCache* images = nullptr,
                                         const TextureInputs& inputs = nullptr);
+/// Registry keys of all texture plugins.
+std::vector<std::string> texture_types();
+
+/// A Texture / ColorTexture / FloatTexture parameter given as a texture reference,
+/// resolved through `lookup` (throws when the texture does not exist); null when the
+/// parameter is absent or a constant.
+std::shared_ptr<Texture> texture_param(const Params& p, const std::string& name, const TextureLookup& lookup);
+/// A ColorTexture parameter: the referenced texture (its average checked against the
+/// declared component range) or a constant texture of the given value or default.
+std::shared_ptr<Texture> color_texture_param(const Params& p, const std::string& name, const TextureLookup& lookup);
 
 std::shared_ptr<Texture> make_constant_texture(const Color& value);
 

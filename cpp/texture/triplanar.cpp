@@ -7,7 +7,6 @@
 // of position); space "object" | "world" ("object"); sharpness (4; higher = crisper seams).
 // Band-limited: each lookup is filtered over the surface footprint in projected uv units.
 #include "texture/procedural.h"
-#include "texture/texture_registry.h"
 
 namespace sg {
 
@@ -52,18 +51,28 @@ class TriplanarTexture final : public Texture {
 
 }  // namespace
 
-std::shared_ptr<Texture> create_triplanar_texture(const ParamSet& params, const TextureInputs& inputs) {
-  TextureRef ref;
-  if (!params.get_texture("texture", &ref)) throw Error("parameter 'texture': a texture reference is required");
-  std::shared_ptr<Texture> tex = inputs ? inputs(ref.id) : nullptr;
-  if (!tex) throw Error("parameter 'texture': texture " + std::to_string(ref.id) + " does not exist");
-  float scale = params.get_float("scale", 1.f);
-  if (!(scale > 0.f)) throw Error("parameter 'scale': must be positive");
-  std::string space = params.get_string("space", "object");
-  if (space != "object" && space != "world") throw Error("parameter 'space': must be object or world");
-  float sharp = params.get_float("sharpness", 4.f);
-  if (!(sharp >= 1.f && sharp <= 64.f)) throw Error("parameter 'sharpness': must lie in [1, 64]");
+namespace {
+
+PluginInfo info() {
+  return PluginInfo("texture", "triplanar",
+                    "Box (triplanar) mapping of another texture for models without usable uvs: three planar "
+                    "projections of the position blended by the normal, band-limited by the footprint.")
+      .add(param::texture("texture", "the projected texture (usually an image)").require())
+      .add(param::real("scale", 1.0, "repeats per unit of position").above(0))
+      .add(param::choice("space", "object", {"object", "world"}, "coordinates of the projections"))
+      .add(param::real("sharpness", 4.0, "blend exponent (higher: crisper seams)").in(1, 64));
+}
+
+std::shared_ptr<Texture> create(const Params& params, const PluginContext& ctx) {
+  std::shared_ptr<Texture> tex = texture_param(params, "texture", ctx.textures);
+  float scale = params.get_float("scale");
+  std::string space = params.get_string("space");
+  float sharp = params.get_float("sharpness");
   return std::make_shared<TriplanarTexture>(std::move(tex), scale, space == "object", sharp);
 }
+
+}  // namespace
+
+SG_REGISTER_PLUGIN(Texture, info(), create)
 
 }  // namespace sg

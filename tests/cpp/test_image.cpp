@@ -357,7 +357,7 @@ TEST(image, bad_parameters_name_the_parameter) {
   r.set("wrap", std::string("tile"));
   e = error_of(r);
   EXPECT_NE(e.find("'wrap'"), std::string::npos) << e;
-  EXPECT_NE(e.find("repeat, clamp or mirror"), std::string::npos) << e;
+  EXPECT_NE(e.find("repeat, clamp, mirror"), std::string::npos) << e;
 
   ParamSet t;
   t.set("filename", std::string("/nonexistent/never/read.png"));

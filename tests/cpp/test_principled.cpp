@@ -16,9 +16,9 @@ namespace {
 
 constexpr double k_glossy_cell_eps = 1e-7;
 
-using Params = std::map<std::string, ParamSet::Value>;
+using Values = std::map<std::string, ParamSet::Value>;
 
-std::shared_ptr<Material> make(const Params& values, const MaterialContext& ctx = no_textures()) {
+std::shared_ptr<Material> make(const Values& values, const MaterialContext& ctx = no_textures()) {
   ParamSet p;
   for (const auto& [k, v] : values) p.set(k, v);
   return create_material("principled", p, ctx, "test");
@@ -26,7 +26,7 @@ std::shared_ptr<Material> make(const Params& values, const MaterialContext& ctx 
 
 std::vector<double> rgb(const Color& c) { return {c.x, c.y, c.z}; }
 
-std::string error_of(const Params& values) {
+std::string error_of(const Values& values) {
   try {
     make(values);
   } catch (const Error& e) {
@@ -80,7 +80,7 @@ double furnace(const Material& mat, const SurfaceInteraction& si, const Vec3f& w
 
 struct Case {
   const char* name;
-  Params params;
+  Values params;
 };
 
 std::vector<Case> cases() {
@@ -164,7 +164,7 @@ TEST(principled, white_furnace_at_most_one) {
   // clearcoat and glass stay <= 1. Required: <= 1.01 everywhere, and >= 0.98 for the
   // white dielectric (no loss either); quadrature of eval for the reflection-only sets.
   struct F {
-    Params p;
+    Values p;
     bool lossless;
   };
   std::vector<F> sets = {

@@ -1,6 +1,8 @@
 // Scene::save / Scene::load: the scene state as XML (pugixml, the only file using
-// its API) plus a binary sidecar "<file>.bin" with mesh and embedded-image data.
-// Ids are preserved exactly, so a replayed scene renders bit-identically.
+// its API) plus a binary sidecar "<file>.bin" with mesh data and the pixels of images
+// that live in memory (GLB-embedded images, Scene::add_image_texture). Ids are preserved
+// exactly, so a replayed scene renders bit-identically. It lives next to the API it
+// serialises (api/scene.h), so no lower layer depends on the Scene.
 #include <pugixml.hpp>
 
 #include <cstdio>
@@ -136,6 +138,7 @@ void Scene::save(const std::string& path) const {
       n.append_attribute("height") = e.pixels->height;
       n.append_attribute("channels") = e.pixels->channels;
       n.append_attribute("offset") = append_blob(bin, e.pixels->pixels);
+      if (e.pixels_integer) n.append_attribute("integer") = true;
     }
     write_params(n, e.params);
   }
@@ -216,15 +219,26 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
       pad(s.m_textures, id);
       std::string type = n.attribute("type").as_string();
       ParamSet ps = read_params(n);
-      if (type == "embedded_image") {
-        auto px = std::make_shared<ImageData>();
+      std::shared_ptr<ImageData> px;
+      if (n.attribute("offset")) {
+        px = std::make_shared<ImageData>();
         px->width = n.attribute("width").as_int();
         px->height = n.attribute("height").as_int();
         px->channels = n.attribute("channels").as_int();
+        if (px->width < 1 || px->height < 1 || px->channels < 1 || px->channels > 4 || px->width > 65536 ||
+            px->height > 65536)
+          throw Error("texture " + std::to_string(id) + ": bad image size");
         read_blob(bin, n.attribute("offset").as_ullong(), size_t(px->width) * px->height * px->channels, &px->pixels,
                   "texture " + std::to_string(id));
+      }
+      if (type == "embedded_image" && px) {
         Color scale = ps.get_color("scale", Color(1.f));
         s.add_embedded_texture(px, scale, ps.get_string("source", ""));
+      } else if (type == "image" && px) {
+        ParamSet rest;  // the pixels replace the in-memory key under "filename"
+        for (const auto& [k, v] : ps.values())
+          if (k != "filename") rest.set(k, v);
+        s.add_image_texture(px, n.attribute("integer").as_bool(false), rest);
       } else {
         s.add_texture(type, ps);
       }
