@@ -22,8 +22,7 @@ sys.path.insert(0, os.path.join(REPO, "python"))
 
 import yaml  # noqa: E402
 
-from synthgen import runner  # noqa: E402
-from synthgen.scenario import OUTPUT_KINDS  # noqa: E402
+from synthgen import outputs, run as runner  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -35,14 +34,14 @@ def main(argv=None) -> int:
     with open(args.scenario) as f:
         spec = yaml.safe_load(f)
     spec["resolution"] = [640, 480]
-    spec["outputs"] = list(OUTPUT_KINDS)
+    spec["outputs"] = list(outputs.kind_names())
     tmp = tempfile.mkdtemp(prefix="synthgen-throughput-")
     try:
         path = os.path.join(tmp, "scenario.yaml")
         with open(path, "w") as f:
             yaml.safe_dump(spec, f, sort_keys=False)
         print(f"scenario: {os.path.relpath(args.scenario, REPO)} at 640x480, {spec['render']['spp']} spp, "
-              f"max_depth {spec['render']['max_depth']}, outputs: {', '.join(OUTPUT_KINDS)}; "
+              f"max_depth {spec['render']['max_depth']}, outputs: {', '.join(outputs.kind_names())}; "
               f"{args.frames} frames per run; {os.cpu_count()} cores")
         best = 0.0
         for w in (int(x) for x in args.workers.split(",")):

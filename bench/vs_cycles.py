@@ -340,7 +340,7 @@ def _render_synthgen_main(spec_path: str) -> int:
     # as Blender's start-up is not part of Cycles' render time; the whole-process time has it.
     _sg().load_image_plugin()
     rgb, t = synthgen_render(spec, int(spec["spp"]), int(spec.get("seed", 0)), int(spec.get("threads", 0)))
-    from synthgen.writers import write_exr
+    from synthgen.outputs.files import write_exr
 
     write_exr(spec["output"], rgb)
     print("SYNTHGEN_RESULT " + json.dumps(t), flush=True)
@@ -486,7 +486,7 @@ def reference_images(spec: dict, args, blender: str, workdir: str) -> tuple:
     else:
         t0 = time.perf_counter()
         sg_ref, _ = synthgen_render(spec, args.ref_spp, seed=1_000_003, threads=args.threads)
-        from synthgen.writers import write_exr
+        from synthgen.outputs.files import write_exr
 
         write_exr(sg_path, sg_ref)
         print(f"  reference synthgen {args.ref_spp} spp: rendered in {time.perf_counter() - t0:.1f} s "

@@ -13,7 +13,9 @@ import sys
 from pathlib import Path
 
 import synthgen
-from synthgen import _core, primitives, scene_file, writers
+from synthgen import _core
+from synthgen.outputs import files, render as render_files
+from synthgen.scene import primitives, scene_file
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "python_api.md"
@@ -69,10 +71,12 @@ def render() -> str:
     for cls in (_core.Scene, _core.PinholeCamera, _core.RenderResult, _core.TextureRef):
         lines += _native_class(cls)
     lines += ["Errors: `synthgen.SynthgenError` (a `ValueError`) and its subclass `synthgen.FileError`.", ""]
+    lines += ["Plugin declarations (`synthgen.plugin_kinds()`, `plugin_names(kind)`, `plugin_info(kind, name)`):",
+              "", "- " + _doc(_core.plugin_info).replace("\n", " "), ""]
     lines += _module_functions(primitives, ["plane", "box", "uv_sphere", "translate", "scale", "rotate"])
     lines += _module_functions(scene_file, ["load_scene", "build_scene", "validate_scene", "format_schema"])
-    lines += _module_functions(writers, [n for n in ("write_outputs", "write_exr", "write_srgb_png", "write_id_png",
-                                                     "write_json") if hasattr(writers, n)])
+    lines += _module_functions(render_files, ["write_outputs", "make_meta", "camera_meta"])
+    lines += _module_functions(files, ["write_exr", "write_srgb_png", "write_id_png", "write_json"])
     return "\n".join(lines).rstrip() + "\n"
 
 

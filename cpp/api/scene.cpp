@@ -89,7 +89,7 @@ uint32_t Scene::add_image_texture(std::shared_ptr<ImageData> pixels, bool intege
   const std::string ctx = "texture " + std::to_string(m_textures.size());
   if (!pixels) throw Error(ctx + ": no pixels");
   if (params.has("filename") || params.has("file"))
-    throw Error(ctx + ": an in-memory image takes no 'filename' (the pixels are the image)");
+    throw Error(ctx + ": an in-memory image takes no 'file' (the pixels are the image)");
   const ImageData& px = *pixels;
   if (px.width < 1 || px.height < 1 || px.channels < 1 || px.channels > 4)
     throw Error(ctx + ": image of " + std::to_string(px.width) + " x " + std::to_string(px.height) + " x " +
@@ -101,7 +101,7 @@ uint32_t Scene::add_image_texture(std::shared_ptr<ImageData> pixels, bool intege
       throw Error(ctx + ": pixel (" + std::to_string(i / px.channels % px.width) + ", " +
                   std::to_string(i / px.channels / px.width) + ") is not finite");
   ParamSet p = params;
-  p.set("filename", m_images.add_memory(pixels, integer_source));
+  p.set("file", m_images.add_memory(pixels, integer_source));
   uint32_t id = add_texture("image", p);
   m_textures[id]->pixels = std::move(pixels);
   m_textures[id]->pixels_integer = integer_source;
@@ -252,6 +252,18 @@ void Scene::set_instance_visible(uint32_t id, bool visible) {
 bool Scene::instance_visible(uint32_t id) const {
   if (id >= m_instances.size() || !m_instances[id]) throw Error("instance " + std::to_string(id) + " does not exist");
   return m_instances[id]->visible;
+}
+
+size_t Scene::texture_count() const {
+  size_t n = 0;
+  for (const auto& t : m_textures) n += t.has_value();
+  return n;
+}
+
+size_t Scene::material_count() const {
+  size_t n = 0;
+  for (const auto& m : m_materials) n += m.has_value();
+  return n;
 }
 
 size_t Scene::instance_count() const {

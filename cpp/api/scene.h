@@ -97,6 +97,10 @@ class Scene {
   void set_instance_visible(uint32_t id, bool visible);
   bool instance_visible(uint32_t id) const;
   size_t instance_count() const;
+  /// Live (not removed) textures and materials: for tools checking that a long run keeps
+  /// its libraries bounded.
+  size_t texture_count() const;
+  size_t material_count() const;
 
   // Lights ---------------------------------------------------------------------------
   uint32_t add_light(const std::string& type, const ParamSet& params);

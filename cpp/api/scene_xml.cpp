@@ -235,9 +235,9 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
         Color scale = ps.get_color("scale", Color(1.f));
         s.add_embedded_texture(px, scale, ps.get_string("source", ""));
       } else if (type == "image" && px) {
-        ParamSet rest;  // the pixels replace the in-memory key under "filename"
+        ParamSet rest;  // the pixels replace the in-memory key under "file"
         for (const auto& [k, v] : ps.values())
-          if (k != "filename") rest.set(k, v);
+          if (k != "file" && k != "filename") rest.set(k, v);
         s.add_image_texture(px, n.attribute("integer").as_bool(false), rest);
       } else {
         s.add_texture(type, ps);

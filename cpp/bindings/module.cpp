@@ -393,7 +393,7 @@ a BVH build). render() commits pending edits first.)doc")
            "Texture 'image' of pixels in memory (H x W or H x W x C, C <= 4; float32/float64 linear values, or\n"
            "uint8/uint16 sRGB-encoded ones, decoded like 8/16-bit files when colorspace is auto) instead\n"
            "of a file: generated plates, signs, decals. `params` are the image plugin's without\n"
-           "'filename'. Identical pixels share one mip pyramid; the image is saved with the scene.")
+           "'file'. Identical pixels share one mip pyramid; the image is saved with the scene.")
       .def("texture_values",
            [](const Scene& s, uint32_t id, py::array_t<float, py::array::c_style | py::array::forcecast> points,
               std::array<float, 3> lo, std::array<float, 3> hi, float world_footprint, py::object uvs) {
@@ -481,6 +481,8 @@ a BVH build). render() commits pending edits first.)doc")
            "toggling costs a top-level rebuild only.")
       .def("instance_visible", &Scene::instance_visible, py::arg("instance"))
       .def("instance_count", &Scene::instance_count)
+      .def("texture_count", &Scene::texture_count, "Live (not removed) textures.")
+      .def("material_count", &Scene::material_count, "Live (not removed) materials.")
       .def("add_light",
            [](Scene& s, const std::string& type, const py::dict& params) {
              return s.add_light(type, params_from_dict(params, "light '" + type + "'"));

@@ -123,8 +123,8 @@ PluginInfo info() {
   return PluginInfo("light", "envmap",
                     "An importance-sampled equirectangular HDR environment: top row = up, image centre = +z, "
                     "u = 1/4 = +x.")
-      .add(param::path("filename", "equirectangular HDR image (EXR/HDR, linear; relative to the scene file in YAML)")
-               .alias("file"))
+      .add(param::path("file", "equirectangular HDR image (EXR/HDR, linear; relative to the scene file in YAML)")
+               .alias("filename"))
       .add(param::real("strength", 1.0, "multiplies the map").at_least(0))
       .add(param::real("rotation", 0.0, "rotation in degrees about the map's up axis (right-handed)"))
       .add(param::vec3("up", Vec3f(0.f, 1.f, 0.f), "world direction of the map's top row"))
@@ -132,7 +132,7 @@ PluginInfo info() {
 }
 
 std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
-  std::string filename = params.get_string("filename");
+  std::string filename = params.get_string("file");
   float strength = params.get_float("strength");
   float rotation = params.get_float("rotation");
   Vec3f up = params.get_vec3("up");
@@ -140,13 +140,13 @@ std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
   if (!(length(up) > 0.f)) throw Error("parameter 'up': must be a finite non-zero vector");
   ImageData img = load_image(filename, ColorSpace::Auto);
   if (img.width < 1 || img.height < 1 || img.channels < 1)
-    throw Error("parameter 'filename': '" + filename + "' has no pixels");
+    throw Error("parameter 'file': '" + filename + "' has no pixels");
   std::vector<Color> pixels(size_t(img.width) * img.height);
   for (size_t i = 0; i < pixels.size(); ++i) {
     const float* p = &img.pixels[i * img.channels];
     Color c = img.channels >= 3 ? Color(p[0], p[1], p[2]) : Color(p[0]);
     if (!is_finite(c))
-      throw Error("parameter 'filename': '" + filename + "' has a non-finite value at pixel (" +
+      throw Error("parameter 'file': '" + filename + "' has a non-finite value at pixel (" +
                   std::to_string(i % img.width) + ", " + std::to_string(i / img.width) + ")");
     pixels[i] = vmax(c, Color(0.f)) * strength;
   }

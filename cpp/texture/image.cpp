@@ -112,7 +112,7 @@ PluginInfo info() {
   return PluginInfo("texture", "image",
                     "An image file read through OpenImageIO (or pixels given from memory with "
                     "Scene.add_image_texture), mip-mapped and filtered over the ray footprint.")
-      .add(param::path("filename", "image file read by OpenImageIO (relative to the scene file in YAML)").alias("file"))
+      .add(param::path("file", "image file read by OpenImageIO (relative to the scene file in YAML)").alias("filename"))
       .add(param::choice("colorspace", "auto", {"auto", "srgb", "linear"},
                          "how to decode the pixels (auto: 8/16-bit images are sRGB)"))
       .add(param::choice("wrap", "repeat", {"repeat", "clamp", "mirror"}, "behaviour outside [0, 1] uv"))
@@ -123,7 +123,7 @@ PluginInfo info() {
 }
 
 std::shared_ptr<Texture> create(const Params& p, const PluginContext& ctx) {
-  std::string filename = p.get_string("filename");
+  std::string filename = p.get_string("file");
   std::string cs = p.get_string("colorspace");
   ImageTextureOptions o;
   o.wrap = parse_wrap_mode(p.get_string("wrap"), "image texture");

@@ -1,9 +1,22 @@
 """synthgen: photoreal synthetic training data for computer vision.
 
-The native core (``synthgen._core``) is an Embree-based path tracer with an
-integration API (typed libraries with stable ids, incremental ``commit()``) and
-exact label outputs. This package adds the Pythonic layer: scene files, writers
-and the ``synthgen`` command line.
+The native core (``synthgen._core``) is an Embree-based path tracer with an integration API
+(typed libraries with stable ids, incremental ``commit()``), exact label outputs and a
+registry of plugins whose parameters are declared once, in C++. The Python package is laid
+out by workflow stage, a subpackage each:
+
+====================  ===================================================================
+``schema``            YAML with positions, typed fields, errors, distributions; the plugin
+                      records generated from the C++ declarations
+``scene``             scene files, primitives, the demo, wear presets, plates, signs, assets
+``scenario``          scenarios: validation and the typed records of one frame
+``randomize``         object randomizers: sign, plate, decals, wear
+``frame``             the per-worker frame renderer (set-up, layout, records)
+``run``               executors, resume, run summaries
+``outputs``           one module per output format, verification
+``post``              image-space steps (exposure, ...)
+``cli``               one module per ``synthgen`` command
+====================  ===================================================================
 """
 from ._core import (  # noqa: F401
     FileError,
@@ -14,8 +27,13 @@ from ._core import (  # noqa: F401
     TextureRef,
     __version__,
     load_image_plugin,
+    plugin_info,
+    plugin_kinds,
+    plugin_names,
 )
-from .scene_file import SceneFileError, build_scene, load_scene  # noqa: F401
+from .schema.errors import SceneFileError  # noqa: F401
+from .scene import primitives, wear  # noqa: F401
+from .scene.scene_file import build_scene, load_scene  # noqa: F401
 
 __all__ = [
     "FileError",
@@ -29,4 +47,9 @@ __all__ = [
     "build_scene",
     "load_image_plugin",
     "load_scene",
+    "plugin_info",
+    "plugin_kinds",
+    "plugin_names",
+    "primitives",
+    "wear",
 ]

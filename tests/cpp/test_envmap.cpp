@@ -386,7 +386,7 @@ TEST(envmap, parameter_errors) {
   };
   std::string good = write_map("constant", 8, 4, [](int, int) { return Color(1.f); });
   ParamSet none;
-  EXPECT_NE(message(none).find("'filename'"), std::string::npos) << message(none);
+  EXPECT_NE(message(none).find("'file'"), std::string::npos) << message(none);
   ParamSet missing;
   missing.set("filename", (temp_dir() / "does_not_exist.exr").string());
   EXPECT_NE(message(missing).find("does_not_exist.exr"), std::string::npos) << message(missing);

@@ -132,11 +132,11 @@ TEST(registry, checks_come_from_the_declaration) {
   e = error_of([&] { Params(projector, params({})); });
   EXPECT_NE(e.find("parameter 'texture' is required"), std::string::npos) << e;
 
-  // Aliases: "file" is "filename"; both at once are an error.
+  // Aliases: "filename" is "file"; both at once are an error.
   const PluginInfo& image = Registry::instance().info("texture", "image");
-  Params aliased(image, params({{"file", std::string("a.png")}}));
-  EXPECT_TRUE(aliased.has("filename"));
-  EXPECT_EQ(aliased.get_string("filename"), "a.png");
+  Params aliased(image, params({{"filename", std::string("a.png")}}));
+  EXPECT_TRUE(aliased.has("file"));
+  EXPECT_EQ(aliased.get_string("file"), "a.png");
   e = error_of([&] { Params(image, params({{"file", std::string("a.png")}, {"filename", std::string("b.png")}})); });
   EXPECT_NE(e.find("given twice"), std::string::npos) << e;
 }
@@ -228,5 +228,5 @@ TEST(registry, in_memory_images_share_a_pyramid_and_replay) {
   fs::remove_all(dir);
   ParamSet with_file;
   with_file.set("filename", std::string("x.png"));
-  EXPECT_NE(error_of([&] { s.add_image_texture(px, false, with_file); }).find("no 'filename'"), std::string::npos);
+  EXPECT_NE(error_of([&] { s.add_image_texture(px, false, with_file); }).find("no 'file'"), std::string::npos);
 }

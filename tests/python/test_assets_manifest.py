@@ -1,4 +1,4 @@
-"""The asset manifest (assets_manifest/*.yaml) and the cache (synthgen.assets)."""
+"""The asset manifest (assets_manifest/*.yaml) and the cache (synthgen.scene.assets)."""
 import hashlib
 import os
 import shutil
@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from synthgen import assets
+from synthgen.scene import assets
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -15,8 +15,8 @@ import pytest
 
 import synthgen
 from synthgen import cli
-from synthgen.scene_file import SceneFileError
-from synthgen.writers import OUTPUT_FILES
+from synthgen import SceneFileError
+from synthgen.outputs.render import OUTPUT_FILES
 
 TINY = textwrap.dedent("""\
     camera: {width: 32, height: 24, fov_y: 45, look_at: {eye: [0, 1.5, -4], target: [0, 0.5, 0]}}
@@ -167,7 +167,7 @@ def test_schema_command(capsys):
 def test_demo_shows_metal_glass_and_coated_under_a_sun_and_sky():
     """The materials issue: the demo shows at least a metal, a glass and a coated object
     under a physical sun-sky."""
-    from synthgen.demo import DEMO_SCENE
+    from synthgen.scene.demo import DEMO_SCENE
 
     used = {o["material"] for o in DEMO_SCENE["objects"]}
     types = {DEMO_SCENE["materials"][m]["type"] for m in used}

@@ -1,10 +1,10 @@
-"""Licence plates (synthgen.plates) and road-sign pictograms (synthgen.signs)."""
+"""Licence plates (synthgen.scene.plates) and road-sign pictograms (synthgen.scene.signs)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from synthgen import plates, raster, signs
+from synthgen.scene import plates, raster, signs
 
 
 @pytest.mark.parametrize("country", ["ru", "de"])

@@ -101,7 +101,7 @@ def test_decal_occlusion_keeps_hidden_surfaces_clean(tmp_path):
         small = s.add_instance(m, P.translate([0.0, 0.0, 0.0]) @ P.scale(0.6), class_id=1, material_id=base)
         big = s.add_instance(m, P.translate([0.0, 0.0, 3.0]) @ P.scale(2.5), class_id=2, material_id=base)
         mat = wear.decal(s, base, path, position=[0.0, 0.0, -4.0], look_at=[0.0, 0.0, 3.0], fov=30.0,
-                         occlusion=occlusion, cache_dir=str(tmp_path))
+                         occlusion=occlusion)
         s.set_instance_material(small, mat)
         s.set_instance_material(big, mat)
         s.add_light("environment", {"radiance": 1.0})

@@ -16,8 +16,11 @@ import numpy as np
 import OpenImageIO as oiio
 import pytest
 
-from synthgen import annotations as A
-from synthgen import runner
+from synthgen.outputs import coco as C, kitti as K, yolo as Y
+from synthgen import outputs, run as runner
+from synthgen.frame import FrameRenderer
+from synthgen.outputs.meta import completed_frames
+from synthgen.outputs.verify import verify_dataset
 
 HERE = os.path.dirname(__file__)
 TINY = os.path.join(HERE, "scenarios", "tiny.yaml")
@@ -75,6 +78,23 @@ def test_same_frames_with_two_workers_and_in_two_halves_with_resume(reference, t
         assert h[k] == ref[k], f"frame 4 rendered alone differs in {k}"
 
 
+def test_workers_get_the_validated_scenario_not_its_path(reference, tmp_path):
+    """A task carries the validated scenario: a scenario that exists only in memory renders
+    the same frame, file for file, as the run that read it from disk."""
+    from synthgen.scenario import parse_scenario
+    from synthgen.schema.yaml_io import parse_yaml
+
+    with open(TINY, encoding="utf-8") as f:
+        text = f.read()
+    sc = parse_scenario(parse_yaml(text, "<memory>"), "<memory>", os.path.dirname(TINY), text)
+    out = str(tmp_path / "mem")
+    r = runner.render_task(sc, out, 2)
+    assert r["ok"], r.get("traceback")
+    ref = hashes(reference)
+    mine = hashes(out)
+    assert mine and all(mine[k] == ref[k] for k in mine), [k for k in mine if mine[k] != ref[k]]
+
+
 def test_output_directory_is_not_overwritten_without_resume(reference):
     with pytest.raises(ValueError, match="--resume"):
         runner.run(TINY, reference, progress=False)
@@ -93,16 +113,16 @@ def test_labels_agree_with_masks(reference):
         with open(os.path.join(reference, "meta", f"{k:06d}.json")) as f:
             meta = json.load(f)
         anns = [a for a in coco["annotations"] if a["image_id"] == k]
-        yolo = A.parse_yolo(open(os.path.join(reference, "labels", f"{k:06d}.txt")).read(), 64, 48)
-        kitti = A.parse_kitti(open(os.path.join(reference, "kitti", f"{k:06d}.txt")).read())
+        yolo = Y.parse_yolo(open(os.path.join(reference, "labels", f"{k:06d}.txt")).read(), 64, 48)
+        kitti = K.parse_kitti(open(os.path.join(reference, "kitti", f"{k:06d}.txt")).read())
         present = sorted(set(np.unique(ids)) - {0})
         # Every visible object is labelled exactly once, nothing else is.
         assert sorted(a["instance_id"] for a in anns) == present
         assert len(yolo) == len(kitti) == len(present)
         for a, (cls, ybox), kt in zip(sorted(anns, key=lambda a: a["instance_id"]), yolo, kitti):
             m = ids == a["instance_id"]
-            np.testing.assert_array_equal(A.rle_decode(a["segmentation"]), m)
-            assert a["area"] == m.sum() and a["bbox"] == A.mask_bbox(m)
+            np.testing.assert_array_equal(C.rle_decode(a["segmentation"]), m)
+            assert a["area"] == m.sum() and a["bbox"] == C.mask_bbox(m)
             assert set(np.unique(sem[m])) == {a["category_id"]}
             obj = next(o for o in meta["objects"] if o["instance_id"] == a["instance_id"])
             assert obj["class_id"] == a["category_id"] and obj["visible_pixels"] == m.sum()
@@ -140,13 +160,13 @@ def test_killed_runs_resume_to_the_same_dataset(tmp_path):
         time.sleep(rng.uniform(0.6, 1.2))
         os.killpg(p.pid, signal.SIGKILL)
         p.wait()
-        done = runner.completed_frames(out) if os.path.isdir(out) else []
+        done = completed_frames(out) if os.path.isdir(out) else []
         interrupted += len(done) < 12
     assert interrupted >= 2, "the kills did not interrupt the run: make the scenario slower"
     r = subprocess.run(cmd, env=env, capture_output=True, text=True)
     assert r.returncode == 0, r.stdout + r.stderr
     assert not glob.glob(os.path.join(out, "**", ".*tmp*"), recursive=True), "temporary files left"
-    assert runner.completed_frames(out) == list(range(12))
+    assert completed_frames(out) == list(range(12))
     assert hashes(out) == hashes(ref_dir)
 
 
@@ -167,7 +187,7 @@ def test_dask_local_cluster_equals_local_run(reference, tmp_path):
 def test_worker_scene_stays_bounded_over_many_frames():
     from synthgen import scenario
 
-    fr = runner.FrameRenderer(scenario.load_scenario(TINY))
+    fr = FrameRenderer(scenario.load_scenario(TINY))
     for k in range(40):
         fr.render(k)
     stats = fr.scene.commit_stats
@@ -175,7 +195,7 @@ def test_worker_scene_stays_bounded_over_many_frames():
     assert fr.scene.instance_count() <= 5
     assert stats["mesh_bvh_builds"] == 3, stats
     # The same frame from a worker that rendered 40 other frames equals a fresh worker's.
-    fresh = runner.FrameRenderer(scenario.load_scenario(TINY))
+    fresh = FrameRenderer(scenario.load_scenario(TINY))
     a, m, _ = fr.render(17)
     b, n, _ = fresh.render(17)
     for key in a:
@@ -184,7 +204,7 @@ def test_worker_scene_stays_bounded_over_many_frames():
 
 
 def test_verify_dataset_accepts_a_run_and_catches_a_wrong_label(reference, tmp_path):
-    r = runner.verify_dataset(reference)
+    r = verify_dataset(reference)
     assert r["frames"] == 6 and r["annotations"] >= 6
     import shutil
 
@@ -196,7 +216,7 @@ def test_verify_dataset_accepts_a_run_and_catches_a_wrong_label(reference, tmp_p
     f[1] = f"{float(f[1]) + 0.1:.6f}"  # shift one YOLO box
     open(path, "w").write("\n".join([" ".join(f)] + lines[1:]) + "\n")
     with pytest.raises(ValueError, match="YOLO line 1"):
-        runner.verify_dataset(bad)
+        verify_dataset(bad)
 
 
 def test_write_frame_is_a_pure_writer(tmp_path):
@@ -214,11 +234,11 @@ def test_write_frame_is_a_pure_writer(tmp_path):
         m = ids == k
         objs.append({"index": k - 1, "instance_id": k, "class": c, "class_id": k, "kind": k - 1,
                      "visible_pixels": int(m.sum()), "amodal_pixels": int(m.sum()) + 4, "occlusion": 0.1,
-                     "visible_fraction": 0.9, "truncation": 0.0 if k == 1 else 0.5, "bbox": A.mask_bbox(m),
+                     "visible_fraction": 0.9, "truncation": 0.0 if k == 1 else 0.5, "bbox": C.mask_bbox(m),
                      "dimensions_hwl": [1, 2, 3], "location_camera": [0, 1, 10], "rotation_y": 0.0, "alpha": 0.0})
     objs.append({"index": 2, "instance_id": 3, "class": "car", "class_id": 1, "kind": 0, "dropped": "no spot"})
     meta = {"frame": 7, "image_size": [w, h], "objects": objs}
-    files = runner.write_frame(str(tmp_path), 7, {"rgb": rgb, "depth": depth, "instance_id": ids, "class_id": cls},
+    files = outputs.write_frame(str(tmp_path), 7, {"rgb": rgb, "depth": depth, "instance_id": ids, "class_id": cls},
                                meta, ["rgb", "rgb_exr", "depth", "depth16", "instance", "semantic", "coco", "yolo",
                                       "kitti"])
     assert sorted(files) == ["depth", "depth16", "instance", "kitti", "meta", "rgb", "rgb_exr", "semantic", "yolo"]
@@ -228,15 +248,15 @@ def test_write_frame_is_a_pure_writer(tmp_path):
     assert set(np.unique(d16[ids > 0])) == {2500} and np.all(d16[ids == 0] == 0)
     exr = np.asarray(oiio.ImageBuf(files["rgb_exr"]).get_pixels(oiio.FLOAT))
     np.testing.assert_array_equal(exr, rgb)
-    yolo = A.parse_yolo(open(files["yolo"]).read(), w, h)
+    yolo = Y.parse_yolo(open(files["yolo"]).read(), w, h)
     assert [c for c, _ in yolo] == [0, 1] and yolo[1][1] == pytest.approx([10, 6, 6, 6])
-    kitti = A.parse_kitti(open(files["kitti"]).read())
+    kitti = K.parse_kitti(open(files["kitti"]).read())
     assert [k["type"] for k in kitti] == ["car", "sign"] and kitti[1]["truncated"] == 0.5
     with open(files["meta"]) as f:
         written = json.load(f)
     anns = written["coco"]["annotations"]
     assert [a["instance_id"] for a in anns] == [1, 2], "the dropped object is not labelled"
-    np.testing.assert_array_equal(A.rle_decode(anns[1]["segmentation"]), ids == 2)
+    np.testing.assert_array_equal(C.rle_decode(anns[1]["segmentation"]), ids == 2)
     assert written["coco"]["image"] == {"id": 7, "file_name": "images/000007.png", "width": w, "height": h}
 
 
@@ -249,13 +269,13 @@ def test_ctrl_c_stops_cleanly_and_keeps_completed_frames(tmp_path):
     p = subprocess.Popen([sys.executable, "-m", "synthgen", "run", slow, "-o", out, "--no-progress"], env=env,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 60
-    while time.time() < deadline and len(runner.completed_frames(out) if os.path.isdir(out) else []) < 2:
+    while time.time() < deadline and len(completed_frames(out) if os.path.isdir(out) else []) < 2:
         time.sleep(0.1)
     p.send_signal(signal.SIGINT)
     stdout, stderr = p.communicate(timeout=60)
     assert p.returncode == 130, stdout + stderr
     assert "interrupted" in stdout + stderr
-    done = runner.completed_frames(out)
+    done = completed_frames(out)
     assert 2 <= len(done) < 40
     assert not glob.glob(os.path.join(out, "**", ".*tmp*"), recursive=True)
     with open(os.path.join(out, "annotations", "coco.json")) as f:
@@ -277,13 +297,13 @@ def test_road_signs_with_plates_and_wear(tmp_path):
     labels agree with the masks, plate texts are valid registrations and recorded, and a frame
     rendered alone equals the same frame rendered after others (per-frame textures and
     materials are created and removed without changing results)."""
-    from synthgen import plates
+    from synthgen.scene import plates
 
     small = small_road_signs(tmp_path, "[96, 72]", "{spp: 2, max_depth: 3}")
     out = str(tmp_path / "ds")
     s = runner.run(small, out, count=4, progress=False)
     assert s["rendered"] == 4 and not s["failures"], s.text()
-    runner.verify_dataset(out)
+    verify_dataset(out)
     n_plates = n_signs = 0
     for k in range(4):
         with open(os.path.join(out, "meta", f"{k:06d}.json")) as f:
@@ -323,7 +343,7 @@ def test_decals_from_scenarios(tmp_path):
     out = str(tmp_path / "ds")
     s = runner.run(scen, out, count=3, progress=False)
     assert s["rendered"] == 3 and not s["failures"], s.text()
-    runner.verify_dataset(out)
+    verify_dataset(out)
     kinds = []
     for k in range(3):
         with open(os.path.join(out, "meta", f"{k:06d}.json")) as f:
@@ -365,7 +385,7 @@ def test_every_wear_parameter_from_yaml(tmp_path):
     out = str(tmp_path / "ds")
     s = runner.run(scen, out, count=2, progress=False)
     assert s["rendered"] == 2 and not s["failures"], s.text()
-    runner.verify_dataset(out)
+    verify_dataset(out)
     seen = 0
     for k in range(2):
         with open(os.path.join(out, "meta", f"{k:06d}.json")) as f:
@@ -386,26 +406,25 @@ def test_every_wear_parameter_from_yaml(tmp_path):
     assert seen >= 2
 
 
-def test_generated_images_do_not_accumulate(tmp_path):
-    """Plates and signs are written as image files for the worker's scene: a long batch keeps
-    only the current frame's files (unique plates would otherwise fill the disk), and the
-    worker's directory is gone with the renderer."""
-    import gc
+def test_generated_images_do_not_accumulate(tmp_path, monkeypatch):
+    """Plates, signs and wear are generated per frame, in memory (Scene.add_image_texture): no
+    file is written for them, and a long batch keeps only the current frame's textures and
+    materials in the worker's scene (unique plates would otherwise grow it without bound)."""
+    import tempfile
 
     from synthgen import scenario
 
+    made = []
+    real = tempfile.mkdtemp
+    monkeypatch.setattr(tempfile, "mkdtemp", lambda *a, **k: made.append(real(*a, **k)) or made[-1])
     small = small_road_signs(tmp_path, "[48, 36]", "{spp: 1, max_depth: 2}")
-    fr = runner.FrameRenderer(scenario.load_scenario(small))
-    tmp = fr._tmp
-    counts = []
+    fr = FrameRenderer(scenario.load_scenario(small))
+    textures, materials = [], []
     for k in range(8):
         _, meta, _ = fr.render(k)
-        files = set(os.listdir(tmp))
-        # Every plate of this frame has its file; no more files than this frame's decorations.
-        plates = [o for o in meta["objects"] if o.get("plate")]
-        assert sum(name.startswith("plate-normal-") for name in files) == len(plates)
-        counts.append(len(files))
-    assert max(counts) <= 12, counts
-    del fr
-    gc.collect()
-    assert not os.path.exists(tmp), "the worker's directory is removed with the renderer"
+        textures.append(fr.scene.texture_count())
+        materials.append(fr.scene.material_count())
+    assert made == []
+    # Bounded: the frame's own generated resources only (not growing with the frame count).
+    assert max(textures) <= 80 and max(materials) <= 60, (textures, materials)
+    assert textures[-1] <= 2 * min(textures[2:]) + 40, textures

@@ -13,8 +13,9 @@ import pytest
 import yaml
 
 import synthgen
-from synthgen import scene_file as sf
-from synthgen.scene_file import SceneFileError, build_scene, load_scene
+from synthgen import schema as sf
+from synthgen.scene import scene_file
+from synthgen import SceneFileError, build_scene, load_scene
 
 REPO = Path(__file__).resolve().parents[2]
 SHARED = REPO.parent / "shared"
@@ -137,14 +138,14 @@ def test_missing_required_key_points_at_the_entry(tmp_path):
 def test_missing_light_type_lists_types(tmp_path):
     e = error_of(write(tmp_path, CAMERA + "objects: [{primitive: box, class_id: 1}]\nlights: [{irradiance: 3}]\n"))
     assert e.key_path == "lights[0]" and "missing required key 'type'" in str(e)
-    assert "sun, environment, point" in str(e)
+    assert "environment, envmap, point, sky, spot, sun" in str(e)
 
 
 def test_exclusive_and_one_of_groups(tmp_path):
     e = error_of(write(tmp_path, "camera: {width: 8, height: 8, fov_y: 40, fx: 5, fy: 5,\n"
                                  "  look_at: {eye: [0, 0, -5], target: [0, 0, 0]}}\n"
                                  "objects: [{primitive: box, class_id: 1}]\n"))
-    assert "give exactly one of 'fov_y' or 'fx'" in str(e)
+    assert e.key_path == "camera.fx" and "'fx' cannot be combined with 'fov_y'" in str(e)
     e = error_of(write(tmp_path, "camera: {width: 8, height: 8, fov_y: 40}\n"
                                  "objects: [{primitive: box, class_id: 1}]\n"))
     assert e.key_path == "camera" and "'look_at' or 'world_from_camera'" in str(e)
@@ -350,7 +351,7 @@ def test_meshes_are_shared_between_instances(tmp_path):
 
 
 def test_format_schema_documents_every_section():
-    text = sf.format_schema()
+    text = scene_file.format_schema()
     for key in ("camera:", "fov_y:", "objects:", "primitive:", "[primitive: sphere]", "lights:",
                 "angular_diameter: number in [0, 90) (default 0.53)", "render:", "spp:"):
         assert key in text
@@ -383,20 +384,20 @@ def test_distribution_extension_point(tmp_path):
         """))
     data = sf.read_yaml(p)
     ctx = RandomizingContext(str(p), str(tmp_path))
-    spec = sf.SCENE_SCHEMA.validate(data, sf.Loc.root(data), ctx)
+    spec = scene_file.SCENE_SCHEMA.validate(data, sf.Loc.root(data), ctx)
     assert isinstance(spec["objects"][0]["radius"], Uniform)
     rng = np.random.default_rng(1)
     frame = sf.map_values(spec, lambda v: float(rng.uniform(v.lo, v.hi)) if isinstance(v, Uniform) else v)
     assert 0.5 <= frame["objects"][0]["radius"] <= 1.0
     assert frame["objects"][0].locs["radius"].line == 5
-    scene, settings, meta = sf.build_validated(frame, ctx)
+    scene, settings, meta = scene_file.build_validated(frame, ctx)
     assert meta["materials"] == {"red": 0}
     # distribution bounds are checked against the slot's range, at their own position
     p = write(tmp_path, CAMERA + "materials:\n  red: {type: diffuse, albedo: {uniform: [0.2, 1.5]}}\n"
                                  "objects: [{primitive: box, class_id: 1}]\n")
     data = sf.read_yaml(p)
     with pytest.raises(SceneFileError) as info:
-        sf.SCENE_SCHEMA.validate(data, sf.Loc.root(data), RandomizingContext(str(p)))
+        scene_file.SCENE_SCHEMA.validate(data, sf.Loc.root(data), RandomizingContext(str(p)))
     assert info.value.key_path == "materials.red.albedo.uniform[1]" and info.value.line == 3
     assert "allowed: number in [0, 1]" in str(info.value)
     # the plain context rejects them
@@ -417,7 +418,7 @@ def _plain(x):
 
 
 def test_demo_yaml_is_the_builtin_demo():
-    from synthgen.demo import DEMO_SCENE
+    from synthgen.scene.demo import DEMO_SCENE
 
     data = yaml.safe_load((REPO / "scenarios" / "demo_scene.yaml").read_text())
     assert _plain(data) == _plain(DEMO_SCENE)
@@ -479,13 +480,13 @@ def test_load_scene_meta_records_source_and_hash(tmp_path):
 
 
 def test_schema_can_be_extended(tmp_path):
-    schema = sf.SCENE_SCHEMA.extend({"frames": sf.Integer(1, min=1, doc="number of frames")})
+    schema = scene_file.SCENE_SCHEMA.extend({"frames": sf.Integer(1, min=1, doc="number of frames")})
     p = write(tmp_path, CAMERA + "objects: [{primitive: box, class_id: 1}]\nframes: 0\n")
     data = sf.read_yaml(p)
     with pytest.raises(SceneFileError) as info:
         schema.validate(data, sf.Loc.root(data), sf.ValidationContext(str(p)))
     assert info.value.key_path == "frames" and info.value.line == 3 and ">= 1" in str(info.value)
-    assert "frames" not in sf.SCENE_SCHEMA.fields  # the original is untouched
+    assert "frames" not in scene_file.SCENE_SCHEMA.fields  # the original is untouched
     data["frames"] = 3
     spec = schema.validate(data, sf.Loc.root(data), sf.ValidationContext(str(p)))
     assert spec["frames"] == 3 and spec["render"]["spp"] == 16

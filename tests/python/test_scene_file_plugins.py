@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 import yaml
 
-from synthgen import scene_file
+from synthgen import SceneFileError
+from synthgen.scene import scene_file
 
 HDR = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
 
@@ -32,14 +33,14 @@ def test_mix_may_refer_to_materials_defined_later():
 def test_material_reference_cycle_is_an_error():
     data = _scene({"top": {"type": "mix", "material_a": "x", "material_b": "top"},
                    "x": {"type": "diffuse"}})
-    with pytest.raises(scene_file.SceneFileError, match="cycle"):
+    with pytest.raises(SceneFileError, match="cycle"):
         scene_file.build_scene(data, "mem.yaml")
 
 
 def test_unknown_material_reference_suggests_a_name():
     data = _scene({"top": {"type": "mix", "material_a": "paint", "material_b": "pain"},
                    "paint": {"type": "diffuse"}})
-    with pytest.raises(scene_file.SceneFileError, match="did you mean 'paint'"):
+    with pytest.raises(SceneFileError, match="did you mean 'paint'"):
         scene_file.build_scene(data, "mem.yaml")
 
 
@@ -50,7 +51,7 @@ def test_spot_and_sky_lights_and_range_errors():
     scene, settings, _ = scene_file.build_scene(data, "mem.yaml")
     assert scene.render(**settings).stats["nan_samples"] == 0
     data["lights"][1]["turbidity"] = 20
-    with pytest.raises(scene_file.SceneFileError, match=r"lights\[1\]\.turbidity"):
+    with pytest.raises(SceneFileError, match=r"lights\[1\]\.turbidity"):
         scene_file.build_scene(data, "mem.yaml")
 
 

@@ -91,7 +91,7 @@ def test_model_without_uvs_carries_rust_scratches_ice_and_dirt():
 
 
 def test_gallery_renders_every_effect_on_every_object():
-    from synthgen import gallery
+    from synthgen.scene import gallery
 
     img = gallery.render_gallery(tile_w=48, tile_h=36, spp=1)
     rows, cols = len(gallery.OBJECTS), len(gallery.EFFECTS)

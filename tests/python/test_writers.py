@@ -10,7 +10,8 @@ import OpenImageIO as oiio
 import pytest
 
 import synthgen
-from synthgen import writers as W
+from synthgen.outputs import files as W
+from synthgen.outputs import render as R
 
 H, W_ = 6, 9
 
@@ -111,12 +112,12 @@ def test_write_outputs_files_and_meta(tmp_path):
     a = arrays(3)
     settings = {"spp": 4, "max_depth": 3, "rr_depth": 5, "seed": 11, "threads": 2, "tile_size": 16}
     stats = {"wall_time_s": 0.5, "samples_per_s": 1e6, "rays_per_s": 2e6}
-    meta = W.make_meta(camera=FakeCamera(), settings=settings, stats=stats, scene={"source": "x.yaml"},
+    meta = R.make_meta(camera=FakeCamera(), settings=settings, stats=stats, scene={"source": "x.yaml"},
                        extra={"note": "hello"})
     out = tmp_path / "frame" / "0001"
-    paths = W.write_outputs(out, a, meta)
-    assert list(paths) == list(W.OUTPUT_FILES)
-    assert sorted(os.listdir(out)) == sorted(W.OUTPUT_FILES)  # and no temporary files left
+    paths = R.write_outputs(out, a, meta)
+    assert list(paths) == list(R.OUTPUT_FILES)
+    assert sorted(os.listdir(out)) == sorted(R.OUTPUT_FILES)  # and no temporary files left
     for name, path in paths.items():
         assert path == str(out / name) and os.path.getsize(path) > 0
     _, buf = read(paths["class.png"])
@@ -132,23 +133,23 @@ def test_write_outputs_files_and_meta(tmp_path):
     assert m["versions"]["synthgen"] == synthgen.__version__
     assert m["versions"]["OpenImageIO"] == oiio.VERSION_STRING
     assert m["scene"] == {"source": "x.yaml"} and m["note"] == "hello"
-    assert m["files"] == list(W.OUTPUT_FILES)
+    assert m["files"] == list(R.OUTPUT_FILES)
 
 
 def test_write_outputs_checks_everything_before_writing(tmp_path):
     a = arrays()
     a["class_id"] = a["class_id"].astype(np.int64) + 70000
     with pytest.raises(synthgen.SynthgenError, match="class_id: ids must lie in \\[0, 65535\\]"):
-        W.write_outputs(tmp_path / "out", a, {})
+        R.write_outputs(tmp_path / "out", a, {})
     assert not (tmp_path / "out").exists()
     a = arrays()
     a["depth"] = a["depth"][:, :-1]
     with pytest.raises(synthgen.SynthgenError, match="'depth' has shape"):
-        W.write_outputs(tmp_path / "out", a, {})
+        R.write_outputs(tmp_path / "out", a, {})
     a = arrays()
     del a["albedo"]
     with pytest.raises(synthgen.SynthgenError, match="missing array 'albedo'"):
-        W.write_outputs(tmp_path / "out", a, {})
+        R.write_outputs(tmp_path / "out", a, {})
 
 
 def test_interrupted_write_keeps_the_old_file(tmp_path, monkeypatch):
@@ -179,7 +180,7 @@ def test_json_is_strict_and_readable(tmp_path):
 def test_camera_meta_of_a_real_camera():
     wfc = synthgen.PinholeCamera.look_at([1, 2, 3], [0, 0, 0], [0, 1, 0])
     cam = synthgen.PinholeCamera.from_fov(50, 64, 48, wfc)
-    m = W.camera_meta(cam)
+    m = R.camera_meta(cam)
     np.testing.assert_allclose(m["K"], cam.K)
     np.testing.assert_allclose(m["world_from_camera"], wfc)
     assert m["convention"] == "opencv" and (m["width"], m["height"]) == (64, 48)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import copy
 from typing import Any, Dict, Optional, Tuple
 
-from ._core import Scene
+from .._core import Scene
 from .scene_file import build_scene
 
 __all__ = ["DEMO_SCENE", "demo_scene_dict", "build_demo_scene"]
@@ -79,7 +79,7 @@ def demo_scene_dict(width: Optional[int] = None, height: Optional[int] = None, *
 def build_demo_scene(width: Optional[int] = None, height: Optional[int] = None,
                      **render: Any) -> Tuple[Scene, Dict[str, Any], Dict[str, Any]]:
     """Builds the demo scene: ``(scene, render_settings, meta)`` like
-    :func:`synthgen.scene_file.build_scene`; arguments as :func:`demo_scene_dict`."""
+    :func:`synthgen.scene.scene_file.build_scene`; arguments as :func:`demo_scene_dict`."""
     scene, settings, meta = build_scene(demo_scene_dict(width, height, **render), source_name="<demo>")
     meta["classes"] = dict(CLASSES)
     return scene, settings, meta

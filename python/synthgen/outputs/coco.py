@@ -1,10 +1,10 @@
-"""Dataset annotations from exact label images: COCO (RLE masks), YOLO and KITTI.
+"""Output kind ``coco``: COCO instance annotations with exact RLE masks.
 
-Pure functions: masks and per-object records in, JSON-ready dicts or text lines out; the
-parsers read the files back (for tests and for users checking a dataset).
+Per frame, the metadata holds the frame's COCO image record and annotations (written with
+it, so a resumed run never mixes frames); at the end of a run they are assembled into
+``annotations/coco.json`` (:func:`assemble_coco`). Pure functions: masks in, JSON-ready
+dicts out.
 
-Conventions
------------
 * Masks are boolean H x W arrays taken from synthgen's instance label (the first camera-ray
   hit of each pixel centre), never filtered.
 * COCO run-length encoding is column-major (Fortran order), starts with the number of 0s
@@ -15,36 +15,21 @@ Conventions
   on, 5-bit groups with a continuation bit, offset by 48). Both forms are valid COCO.
 * ``bbox`` = ``[x, y, w, h]`` of the tight box around the mask's pixels, pixel-edge
   coordinates (a single pixel at column 3, row 5 is ``[3, 5, 1, 1]``), as pycocotools' toBbox.
-* YOLO: ``class cx cy w h`` with the box centre and size divided by the image width/height.
-* KITTI 2D object labels: ``type truncated occluded alpha left top right bottom h w l x y z
-  rotation_y``; the box is in pixel-edge coordinates (right = x + w); 3D fields in the camera
-  frame (x right, y down, z forward, metres) when known, else KITTI's "unknown" values
-  (-1 for dimensions, -1000 for the location, -10 for the angles).
 """
 from __future__ import annotations
 
-import math
+import json
+import os
 from collections.abc import Mapping, Sequence
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, Iterable, List, Optional
 
 import numpy as np
 
-__all__ = [
-    "rle_encode",
-    "rle_decode",
-    "rle_to_string",
-    "rle_from_string",
-    "rle_area",
-    "mask_bbox",
-    "coco_annotation",
-    "coco_dataset",
-    "yolo_line",
-    "yolo_lines",
-    "parse_yolo",
-    "kitti_line",
-    "parse_kitti",
-    "kitti_occlusion_level",
-]
+from .files import write_json
+from .registry import Frame, OutputKind, frame_name, register
+
+__all__ = ["rle_encode", "rle_decode", "rle_to_string", "rle_from_string", "rle_area", "mask_bbox",
+           "coco_annotation", "coco_dataset", "frame_annotations", "frame_record", "assemble_coco"]
 
 
 # ---------------------------------------------------------------------------------------
@@ -192,80 +177,46 @@ def coco_dataset(images: Sequence[Mapping[str, Any]], annotations: Sequence[Mapp
 
 
 # ---------------------------------------------------------------------------------------
-# YOLO
+# Datasets
 
 
-def yolo_line(class_index: int, bbox: Sequence[float], width: int, height: int) -> str:
-    """``class cx cy w h`` (normalized) of a COCO-style ``[x, y, w, h]`` pixel box."""
-    x, y, w, h = (float(v) for v in bbox)
-    return (f"{int(class_index)} {(x + w / 2) / width:.6f} {(y + h / 2) / height:.6f} "
-            f"{w / width:.6f} {h / height:.6f}")
-
-
-def yolo_lines(objects: Sequence[Mapping[str, Any]], width: int, height: int) -> List[str]:
-    """YOLO lines of records with ``class_index`` (0-based) and ``bbox``."""
-    return [yolo_line(o["class_index"], o["bbox"], width, height) for o in objects]
-
-
-def parse_yolo(text: str, width: int, height: int) -> List[Tuple[int, List[float]]]:
-    """(class index, [x, y, w, h] in pixels) per line of a YOLO label file."""
-    out = []
-    for n, line in enumerate(text.splitlines(), 1):
-        if not line.strip():
+def frame_annotations(meta: Mapping[str, Any], instance_id: np.ndarray) -> List[Dict[str, Any]]:
+    """COCO annotations (image_id = frame, ids assigned later) of a frame's visible objects."""
+    anns = []
+    for o in meta["objects"]:
+        if o.get("dropped") or not o.get("visible_pixels"):
             continue
-        f = line.split()
-        if len(f) != 5:
-            raise ValueError(f"YOLO line {n}: expected 5 fields, got {len(f)}")
-        c, cx, cy, w, h = int(f[0]), *(float(v) for v in f[1:])
-        out.append((c, [(cx - w / 2) * width, (cy - h / 2) * height, w * width, h * height]))
-    return out
+        a = coco_annotation(1, int(meta["frame"]), int(o["class_id"]), instance_id == o["instance_id"],
+                            extra={"instance_id": o["instance_id"], "occlusion": o["occlusion"],
+                                   "truncation": o["truncation"]})
+        if a is not None:
+            anns.append(a)
+    return anns
 
 
-# ---------------------------------------------------------------------------------------
-# KITTI
+def frame_record(frame: Frame) -> Dict[str, Any]:
+    """The frame's COCO image record and (when ``coco`` is selected) its annotations, kept in
+    the frame's metadata until :func:`assemble_coco`."""
+    w, h = frame.size
+    ids = np.asarray(frame.arrays["instance_id"])
+    return {"image": {"id": frame.index, "file_name": f"images/{frame_name(frame.index)}.png", "width": w,
+                      "height": h},
+            "annotations": frame_annotations(frame.meta, ids) if "coco" in frame.outputs else []}
 
 
-def kitti_occlusion_level(visible_fraction: float) -> int:
-    """KITTI's occlusion state from the visible fraction of the object's (in-image) area:
-    0 fully visible (>= 0.95), 1 partly occluded (>= 0.5), 2 largely occluded."""
-    if visible_fraction >= 0.95:
-        return 0
-    if visible_fraction >= 0.5:
-        return 1
-    return 2
+def assemble_coco(out_dir: str, class_names: Sequence[str], frames: Iterable[int]) -> str:
+    """annotations/coco.json from the per-frame records in meta/*.json."""
+    images, anns = [], []
+    for k in sorted(frames):
+        with open(os.path.join(out_dir, "meta", frame_name(k) + ".json"), encoding="utf-8") as f:
+            meta = json.load(f)
+        images.append(meta["coco"]["image"])
+        anns.extend(meta["coco"]["annotations"])
+    ds = coco_dataset(images, anns, class_names, info={"description": "synthgen dataset", "version": "1"})
+    path = os.path.join(out_dir, "annotations", "coco.json")
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    return write_json(path, ds)
 
 
-def kitti_line(type_name: str, bbox: Sequence[float], truncated: float = 0.0, occluded: int = 3,
-               alpha: float = -10.0, dimensions: Optional[Sequence[float]] = None,
-               location: Optional[Sequence[float]] = None, rotation_y: float = -10.0) -> str:
-    """One KITTI object line. ``bbox`` is COCO-style ``[x, y, w, h]``; ``dimensions`` (h, w, l)
-    and ``location`` (x, y, z of the bottom centre, camera frame) default to unknown."""
-    x, y, w, h = (float(v) for v in bbox)
-    name = str(type_name).replace(" ", "_")
-    dims = dimensions if dimensions is not None else (-1.0, -1.0, -1.0)
-    loc = location if location is not None else (-1000.0, -1000.0, -1000.0)
-    return (f"{name} {float(truncated):.2f} {int(occluded)} {float(alpha):.2f} "
-            f"{x:.2f} {y:.2f} {x + w:.2f} {y + h:.2f} "
-            f"{dims[0]:.2f} {dims[1]:.2f} {dims[2]:.2f} {loc[0]:.2f} {loc[1]:.2f} {loc[2]:.2f} {float(rotation_y):.2f}")
-
-
-def parse_kitti(text: str) -> List[Dict[str, Any]]:
-    """Records (type, truncated, occluded, alpha, bbox as [x, y, w, h], dimensions, location,
-    rotation_y) per line of a KITTI label file."""
-    out = []
-    for n, line in enumerate(text.splitlines(), 1):
-        if not line.strip():
-            continue
-        f = line.split()
-        if len(f) not in (15, 16):
-            raise ValueError(f"KITTI line {n}: expected 15 or 16 fields, got {len(f)}")
-        v = [float(a) for a in f[1:15]]
-        out.append({"type": f[0], "truncated": v[0], "occluded": int(v[1]), "alpha": v[2],
-                    "bbox": [v[3], v[4], v[5] - v[3], v[6] - v[4]], "dimensions": v[7:10], "location": v[10:13],
-                    "rotation_y": v[13]})
-    return out
-
-
-def wrap_angle(a: float) -> float:
-    """An angle in radians wrapped to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
+register(OutputKind("coco", "COCO instance annotations (RLE masks, occlusion, truncation): annotations/coco.json",
+                    order=70, finalize=assemble_coco, module=__name__))

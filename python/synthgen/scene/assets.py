@@ -30,12 +30,12 @@ from typing import Any, Dict, Iterable, List, Optional
 
 import yaml
 
-from ._core import SynthgenError
+from .._core import SynthgenError
 
 __all__ = ["AssetError", "manifest_dir", "load_manifest", "cache_dir", "fetch", "resolve", "KINDS"]
 
 KINDS = ("mesh", "hdr", "texture", "photo", "svg", "image", "data")
-_REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+_REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 
 
 class AssetError(SynthgenError):

@@ -17,11 +17,12 @@ relative mapping, per metre for object/world); roughness in [0, 1]; bump heights
 """
 from __future__ import annotations
 
-from typing import Any, Dict, Optional, Sequence
+import os
+from typing import Any, Dict, Optional, Sequence, Union
 
 import numpy as np
 
-from ._core import Scene, SynthgenError, TextureRef
+from .._core import Scene, SynthgenError, TextureRef
 
 __all__ = ["rust", "scratches", "ice", "dirt", "decal", "RUST_COLORS"]
 
@@ -197,18 +198,18 @@ def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: 
     return _mix(scene, base, wear, mask, stochastic=True)
 
 
-def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], look_at: Sequence[float],
-          up: Sequence[float] = (0.0, 1.0, 0.0), fov: float = 20.0, aspect: float = 1.0, occlusion: bool = True,
-          depth_resolution: int = 512, roughness: float = 0.4, cache_dir: Optional[str] = None,
-          space: str = "world", facing: Optional[bool] = None) -> int:
-    """An image (sticker, graffiti, stripes, a plate) projected onto ``base`` by a pinhole
+def decal(scene: Scene, base: int, image: Union[str, os.PathLike, np.ndarray], *, position: Sequence[float],
+          look_at: Sequence[float], up: Sequence[float] = (0.0, 1.0, 0.0), fov: float = 20.0, aspect: float = 1.0,
+          occlusion: bool = True, depth_resolution: int = 512, roughness: float = 0.4, space: str = "world",
+          facing: Optional[bool] = None) -> int:
+    """An image (sticker, graffiti, stripes, a plate; a file or an array of linear values)
+    projected onto ``base`` by a pinhole
     projector at ``position`` looking at ``look_at`` (vertical ``fov`` degrees, width/height
     ``aspect``), for models with no or unusable uvs. Returns a mix of ``base`` and a principled
     decal material weighted by the projector's frustum mask. With ``occlusion`` the scene as it
-    is now is rendered (depth only) from the projector into a shadow map, so surfaces hidden
-    from the projector stay clean; move nothing in front of the projector afterwards. The
-    shadow map is an EXR file in ``cache_dir`` (default: a temporary directory removed when
-    the process exits).
+    is now is rendered (depth only) from the projector into a shadow map (an in-memory
+    texture), so surfaces hidden from the projector stay clean; move nothing in front of the
+    projector afterwards.
     ``space="object"`` puts the projector in the object space of the instances using the
     material (it moves with them; no shadow-map test then). With ``facing`` (default: in
     object space) only surfaces whose normal faces the projector receive the decal: it stays
@@ -221,11 +222,7 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
         occlusion = False
     if facing is None:
         facing = space == "object"
-    import os
-    import tempfile
-
-    from ._core import PinholeCamera
-    from .writers import write_exr
+    from .._core import PinholeCamera
 
     _check("fov", fov, 0.1, 170.0)
     _check("aspect", aspect, 1e-3, 1e3)
@@ -243,17 +240,12 @@ def decal(scene: Scene, base: int, image: str, *, position: Sequence[float], loo
             depth = np.where(np.isfinite(depth), depth, np.float32(1e30))  # nothing seen: never occluded
         finally:
             scene.set_camera(previous)
-        d = tempfile.mkdtemp(prefix="synthgen-decal-", dir=cache_dir)
-        if cache_dir is None:  # a private temporary directory: removed when the process exits
-            import atexit
-            import shutil
-
-            atexit.register(shutil.rmtree, d, True)
-        path = os.path.join(d, "depth.exr")
-        write_exr(path, depth)
-        dm = scene.add_texture("image", {"filename": path, "colorspace": "linear", "wrap": "clamp"})
+        dm = scene.add_image_texture(depth, {"colorspace": "linear", "wrap": "clamp"})
         common["depth_map"] = TextureRef(dm)
-    img = scene.add_texture("image", {"filename": str(image), "wrap": "clamp"})
+    if isinstance(image, np.ndarray):
+        img = scene.add_image_texture(image, {"wrap": "clamp"})
+    else:
+        img = scene.add_texture("image", {"file": os.fspath(image), "wrap": "clamp"})
     color = scene.add_texture("projector", dict(common, texture=TextureRef(img)))
     mask = scene.add_texture("projector", dict(common, texture=TextureRef(img), output="mask"))
     sticker = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness)})

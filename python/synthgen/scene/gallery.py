@@ -7,15 +7,12 @@ a plate), a bent car body panel (car paint), a sphere (painted metal). Determini
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from typing import Any, Dict, List, Tuple
 
 import numpy as np
 
 from . import plates, primitives as P, raster as R, signs, wear
-from ._core import PinholeCamera, Scene, TextureRef
-from .writers import write_exr
+from .._core import PinholeCamera, Scene, TextureRef
 
 __all__ = ["EFFECTS", "OBJECTS", "render_gallery"]
 
@@ -48,7 +45,7 @@ def _panel_mesh(width: float = 1.4, height: float = 0.8, bend: float = 0.25, n: 
     return {"positions": pos, "indices": np.asarray(idx, np.uint32), "uvs": uv}
 
 
-def _tile(obj: str, effect: str, params: Dict[str, Any], tmp: str, w: int, h: int, spp: int) -> np.ndarray:
+def _tile(obj: str, effect: str, params: Dict[str, Any], w: int, h: int, spp: int) -> np.ndarray:
     s = Scene()
     ground = P.plane(20.0, 20.0)
     s.add_instance(s.add_mesh(ground["positions"], ground["indices"], normals=ground["normals"]), np.eye(4),
@@ -56,10 +53,7 @@ def _tile(obj: str, effect: str, params: Dict[str, Any], tmp: str, w: int, h: in
     target = (0.0, 0.55, 0.0)
     if obj == "sign":
         sign = signs.render_sign("stop", None, 256)
-        path = os.path.join(tmp, "stop.exr")
-        if not os.path.exists(path):
-            write_exr(path, sign["rgba"])
-        tex = s.add_texture("image", {"filename": path, "wrap": "clamp", "colorspace": "linear"})
+        tex = s.add_image_texture(np.asarray(sign["rgba"], np.float32), {"wrap": "clamp", "colorspace": "linear"})
         base = s.add_material("principled", {"base_color": TextureRef(tex), "roughness": 0.4, "alpha": TextureRef(tex),
                                              "alpha_mode": "mask"})
         q = np.array([[-0.4, 0.3, 0.0], [0.4, 0.3, 0.0], [0.4, 1.1, 0.0], [-0.4, 1.1, 0.0]], np.float32)
@@ -98,10 +92,8 @@ def _tile(obj: str, effect: str, params: Dict[str, Any], tmp: str, w: int, h: in
             band = ((x + y) // 16) % 2 == 0
             img = np.where(band[..., None], np.array([0.8, 0.6, 0.0], np.float32), np.float32(0.02)).astype(np.float32)
             aspect, fov = 4.0, 3.5
-        path = os.path.join(tmp, f"{effect}.exr")
-        write_exr(path, img)
-        mat = wear.decal(s, base, path, position=[0.0, target[1], -3.0], look_at=list(target), fov=fov,
-                         aspect=aspect, occlusion=True, cache_dir=tmp)
+        mat = wear.decal(s, base, np.asarray(img, np.float32), position=[0.0, target[1], -3.0], look_at=list(target),
+                         fov=fov, aspect=aspect, occlusion=True)
     s.set_instance_material(inst, mat)
     s.add_light("sky", {"elevation": 35.0, "azimuth": 150.0, "turbidity": 3.0, "strength": 0.02})
     return np.asarray(s.render(spp=spp, max_depth=6, seed=1).rgb)
@@ -120,21 +112,20 @@ def _caption(text: str, w: int, h: int) -> np.ndarray:
 def render_gallery(tile_w: int = 240, tile_h: int = 180, spp: int = 32) -> np.ndarray:
     """The gallery image (linear RGB): rows OBJECTS, columns EFFECTS, a caption under each tile."""
     rows = []
-    with tempfile.TemporaryDirectory(prefix="synthgen-gallery-") as tmp:
-        for obj in OBJECTS:
-            row = []
-            for effect, params in EFFECTS:
-                tile = _tile(obj, effect, params, tmp, tile_w, tile_h, spp)
-                ptxt = ", ".join(f"{k}={v}" for k, v in params.items())
-                cap = _caption(f"{obj}: {effect}\n{ptxt}" if ptxt else f"{obj}: {effect}", tile_w, 32)
-                # Captions are in display values already: undo the sRGB encoding applied on output.
-                cap = np.where(cap <= 0.04045, cap / 12.92, ((cap + 0.055) / 1.055) ** 2.4)
-                row.append(np.concatenate([tile, cap], axis=0))
-            rows.append(np.concatenate(row, axis=1))
+    for obj in OBJECTS:
+        row = []
+        for effect, params in EFFECTS:
+            tile = _tile(obj, effect, params, tile_w, tile_h, spp)
+            ptxt = ", ".join(f"{k}={v}" for k, v in params.items())
+            cap = _caption(f"{obj}: {effect}\n{ptxt}" if ptxt else f"{obj}: {effect}", tile_w, 32)
+            # Captions are in display values already: undo the sRGB encoding applied on output.
+            cap = np.where(cap <= 0.04045, cap / 12.92, ((cap + 0.055) / 1.055) ** 2.4)
+            row.append(np.concatenate([tile, cap], axis=0))
+        rows.append(np.concatenate(row, axis=1))
     return np.concatenate(rows, axis=0).astype(np.float32)
 
 
 def write_gallery(path: str, **kw: Any) -> str:
-    from .writers import write_srgb_png
+    from ..outputs.files import write_srgb_png
 
     return write_srgb_png(path, render_gallery(**kw))

@@ -1,30 +1,16 @@
-"""Output writers: render arrays + metadata -> files (pure functions, no rendering).
+"""File writers: arrays -> files, atomically (pure functions, no rendering).
 
-:func:`write_outputs` writes one frame into a directory:
-
-============== =========================================================================
-``rgb.exr``    linear radiance, float32 RGB (lossless ZIP compression)
-``rgb.png``    the same, sRGB-encoded (IEC 61966-2-1 OETF), clipped to [0, 1], 8-bit
-``depth.exr``  camera-space z (the OpenCV depth convention), float32, one channel "Y";
-               ``+inf`` where the camera ray hits nothing
-``normal.exr`` world-space shading normal, float32 RGB = xyz, 0 on the background
-``albedo.exr`` surface albedo, float32 RGB
-``instance.png`` instance id, 16-bit single-channel PNG (0 = background)
-``class.png``  class id, 16-bit single-channel PNG (0 = background)
-``meta.json``  settings, seed, stats, camera K and world_from_camera, versions, ...
-============== =========================================================================
-
-All image I/O goes through OpenImageIO. Every file is written to a temporary file in
-the same directory and renamed over the target (``os.replace``), so an interrupted run
-never leaves a truncated file; ``meta.json`` is written last.
+EXR (float32, lossless, a fixed header date so equal images are equal files), 8-bit sRGB
+PNG, 16-bit id PNG, strictly valid JSON and plain text. All image I/O goes through
+OpenImageIO. Every file is written to a temporary file in the same directory and renamed
+over the target (``os.replace``), so an interrupted run never leaves a truncated file
+under a final name.
 """
 from __future__ import annotations
 
 import json
 import math
 import os
-import platform
-import sys
 import uuid
 from collections.abc import Mapping
 from typing import Any, Dict, Optional, Sequence
@@ -32,26 +18,11 @@ from typing import Any, Dict, Optional, Sequence
 import numpy as np
 import OpenImageIO as oiio
 
-from ._core import SynthgenError, __version__
+from .._core import SynthgenError
 
-__all__ = [
-    "OUTPUT_FILES",
-    "ID_MAX",
-    "srgb_encode",
-    "to_srgb8",
-    "write_exr",
-    "write_srgb_png",
-    "write_id_png",
-    "write_json",
-    "camera_meta",
-    "versions",
-    "make_meta",
-    "write_outputs",
-]
+__all__ = ["ID_MAX", "srgb_encode", "to_srgb8", "write_exr", "write_srgb_png", "write_id_png", "write_json",
+           "write_text", "check_ids", "as_hwc"]
 
-#: Files written by :func:`write_outputs`, in writing order.
-OUTPUT_FILES = ("rgb.exr", "rgb.png", "depth.exr", "normal.exr", "albedo.exr", "instance.png", "class.png",
-                "meta.json")
 #: DateTime written into every EXR header (see :func:`write_exr`).
 EXR_DATETIME = "2000:01:01 00:00:00"
 #: Largest id a 16-bit PNG can hold.
@@ -134,7 +105,7 @@ def to_srgb8(linear: np.ndarray) -> np.ndarray:
     return np.round(srgb_encode(linear) * 255.0).astype(np.uint8)
 
 
-def _as_hwc(a: np.ndarray, what: str, channels: Optional[int] = None) -> np.ndarray:
+def as_hwc(a: np.ndarray, what: str, channels: Optional[int] = None) -> np.ndarray:
     a = np.asarray(a)
     if a.ndim == 2:
         a = a[:, :, None]
@@ -154,7 +125,7 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: Optiona
     byte-identical files (reproducible datasets, comparable hashes). Returns the path.
     """
     path = os.fspath(path)
-    a = _as_hwc(array, path).astype(np.float32, copy=False)
+    a = as_hwc(array, path).astype(np.float32, copy=False)
     c = a.shape[2]
     if channel_names is None:
         defaults = {1: ("Y",), 3: ("R", "G", "B"), 4: ("R", "G", "B", "A")}
@@ -167,7 +138,7 @@ def write_exr(path: str | os.PathLike, array: np.ndarray, channel_names: Optiona
 def write_srgb_png(path: str | os.PathLike, rgb: np.ndarray) -> str:
     """Writes linear RGB (H x W x 3) as an 8-bit sRGB PNG (clipped). Returns the path."""
     path = os.fspath(path)
-    a = _as_hwc(rgb, path, 3)
+    a = as_hwc(rgb, path, 3)
     return _oiio_write(path, to_srgb8(a), oiio.UINT8, ("R", "G", "B"), {"oiio:ColorSpace": "sRGB"})
 
 
@@ -177,11 +148,11 @@ def write_id_png(path: str | os.PathLike, ids: np.ndarray) -> str:
     Raises SynthgenError when an id is negative or exceeds 65535 (instead of wrapping).
     """
     path = os.fspath(path)
-    a = _check_ids(ids, path)
+    a = check_ids(ids, path)
     return _oiio_write(path, a.astype(np.uint16)[:, :, None], oiio.UINT16, ("Y",))
 
 
-def _check_ids(ids: np.ndarray, what: str) -> np.ndarray:
+def check_ids(ids: np.ndarray, what: str) -> np.ndarray:
     a = np.asarray(ids)
     if a.ndim != 2 or a.size == 0:
         raise SynthgenError(f"{what}: expected an H x W id array, got shape {a.shape}")
@@ -256,121 +227,15 @@ def write_json(path: str | os.PathLike, obj: Any) -> str:
     return path
 
 
-# ---------------------------------------------------------------------------------------
-# Metadata
-
-
-def camera_meta(camera: Any) -> Dict[str, Any]:
-    """JSON-ready description of a PinholeCamera (or any object with fx, fy, cx, cy,
-    width, height, world_from_camera): intrinsics, ``K`` (3x3) and world_from_camera
-    (4x4, OpenCV camera axes: x right, y down, z forward)."""
-    fx, fy, cx, cy = (float(getattr(camera, k)) for k in ("fx", "fy", "cx", "cy"))
-    return {
-        "model": "pinhole",
-        "convention": "opencv",
-        "width": int(camera.width),
-        "height": int(camera.height),
-        "fx": fx,
-        "fy": fy,
-        "cx": cx,
-        "cy": cy,
-        "K": [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]],
-        "world_from_camera": np.asarray(camera.world_from_camera, dtype=np.float64).tolist(),
-    }
-
-
-def versions() -> Dict[str, str]:
-    """Versions of synthgen and the libraries that produced the files."""
-    import yaml
-
-    return {
-        "synthgen": __version__,
-        "python": platform.python_version(),
-        "numpy": np.__version__,
-        "OpenImageIO": oiio.VERSION_STRING,
-        "PyYAML": getattr(yaml, "__version__", "unknown"),
-        "platform": sys.platform,
-    }
-
-
-def make_meta(*, camera: Any, settings: Mapping[str, Any], stats: Optional[Mapping[str, Any]] = None,
-              scene: Optional[Mapping[str, Any]] = None, extra: Optional[Mapping[str, Any]] = None) -> Dict[str, Any]:
-    """The content of meta.json: ``settings`` (render settings, including ``seed``),
-    ``seed``, ``stats``, ``camera`` (:func:`camera_meta`), ``scene`` (e.g. the meta of
-    :func:`synthgen.scene_file.load_scene`), ``versions`` and any ``extra`` keys."""
-    meta: Dict[str, Any] = {
-        "format": "synthgen-frame",
-        "format_version": 1,
-        "settings": dict(settings),
-        "seed": settings.get("seed"),
-        "stats": dict(stats or {}),
-        "camera": camera if isinstance(camera, Mapping) else camera_meta(camera),
-        "outputs": {
-            "rgb.exr": "linear RGB radiance, float32",
-            "rgb.png": "sRGB-encoded RGB, 8-bit, clipped",
-            "depth.exr": "camera-space z (OpenCV), float32 channel Y, +inf on background",
-            "normal.exr": "world-space shading normal xyz as RGB, float32, 0 on background",
-            "albedo.exr": "surface albedo, float32 RGB",
-            "instance.png": "instance id, uint16, 0 = background",
-            "class.png": "class id, uint16, 0 = background",
-        },
-        "versions": versions(),
-    }
-    if scene is not None:
-        meta["scene"] = dict(scene)
-    if extra:
-        meta.update(extra)
-    return meta
-
-
-# ---------------------------------------------------------------------------------------
-# One frame
-
-
-def _get(result: Any, name: str) -> np.ndarray:
-    if isinstance(result, Mapping):
-        if name not in result:
-            raise SynthgenError(f"write_outputs: missing array '{name}'")
-        return np.asarray(result[name])
-    return np.asarray(getattr(result, name))
-
-
-def write_outputs(out_dir: str | os.PathLike, result: Any, meta: Mapping[str, Any]) -> Dict[str, str]:
-    """Writes every file of :data:`OUTPUT_FILES` for one frame into ``out_dir``.
-
-    ``result`` is a :class:`synthgen.RenderResult` or a mapping with the arrays ``rgb``
-    (H x W x 3), ``depth`` (H x W), ``normal``, ``albedo`` (H x W x 3), ``instance_id``
-    and ``class_id`` (H x W integers); ``meta`` is the meta.json content (see
-    :func:`make_meta`). All arrays are checked (shapes, id range) before the first file
-    is written. Creates ``out_dir``; returns {file name: path} in writing order.
-    """
-    out_dir = os.fspath(out_dir)
-    rgb = _as_hwc(_get(result, "rgb"), "rgb", 3)
-    h, w = rgb.shape[:2]
-    depth = _get(result, "depth")
-    normal = _as_hwc(_get(result, "normal"), "normal", 3)
-    albedo = _as_hwc(_get(result, "albedo"), "albedo", 3)
-    inst = _check_ids(_get(result, "instance_id"), "instance_id")
-    cls = _check_ids(_get(result, "class_id"), "class_id")
-    for name, a in (("depth", depth), ("normal", normal), ("albedo", albedo), ("instance_id", inst),
-                    ("class_id", cls)):
-        if a.shape[:2] != (h, w):
-            raise SynthgenError(f"write_outputs: '{name}' has shape {a.shape}, expected {h} x {w} like rgb")
-    if depth.ndim != 2:
-        raise SynthgenError(f"write_outputs: 'depth' must be H x W, got shape {depth.shape}")
-    os.makedirs(out_dir, exist_ok=True)
-    j = lambda name: os.path.join(out_dir, name)  # noqa: E731
-    paths = {
-        "rgb.exr": write_exr(j("rgb.exr"), rgb),
-        "rgb.png": write_srgb_png(j("rgb.png"), rgb),
-        "depth.exr": write_exr(j("depth.exr"), depth),
-        "normal.exr": write_exr(j("normal.exr"), normal),
-        "albedo.exr": write_exr(j("albedo.exr"), albedo),
-        "instance.png": write_id_png(j("instance.png"), inst),
-        "class.png": write_id_png(j("class.png"), cls),
-    }
-    meta = dict(meta)
-    meta.setdefault("files", list(OUTPUT_FILES))
-    meta.setdefault("image_size", [w, h])
-    paths["meta.json"] = write_json(j("meta.json"), meta)
-    return paths
+def write_text(path: str | os.PathLike, text: str) -> str:
+    """Writes text (UTF-8) atomically. Returns the path."""
+    path = os.fspath(path)
+    tmp = _temp_path(path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+        _commit(tmp, path)
+    except BaseException:
+        _discard(tmp)
+        raise
+    return path

@@ -1,0 +1,109 @@
+"""Helpers shared by the commands: argument types, render options, progress output, the
+render-and-write of ``synthgen render`` / ``synthgen demo``."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from typing import Any, Dict
+
+from ..schema.plugins import plugin_info
+
+EXIT_OK = 0
+EXIT_INPUT_ERROR = 2
+EXIT_INTERRUPTED = 130
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {v}")
+    return v
+
+
+def nonnegative_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {v}")
+    return v
+
+
+#: Command-line render options: (flag, declared render setting, metavar, argument type).
+RENDER_OPTIONS = (("--spp", "spp", "N", positive_int), ("--max-depth", "max_depth", "D", positive_int),
+                  ("--rr-depth", "rr_depth", "R", nonnegative_int), ("--threads", "threads", "T", nonnegative_int),
+                  ("--seed", "seed", "S", nonnegative_int))
+
+
+def add_render_options(p: argparse.ArgumentParser) -> None:
+    """The render settings as options; their help (meaning and default) comes from the
+    settings' declaration (plugin ("render", "path_tracer"))."""
+    g = p.add_argument_group("render settings (override the scene's 'render' section)")
+    declared = {q["name"]: q for q in plugin_info("render", "path_tracer")["params"]}
+    for flag, name, metavar, type_ in RENDER_OPTIONS:
+        q = declared[name]
+        g.add_argument(flag, type=type_, metavar=metavar, help=f"{q['doc']} (default: the scene's, else {q['default']})")
+
+
+def debug_option(p: argparse.ArgumentParser, top: bool) -> None:
+    # On sub-commands the default is SUPPRESS so that `synthgen --debug render ...` is
+    # not overwritten by the sub-command's default.
+    p.add_argument("--debug", action="store_true", default=False if top else argparse.SUPPRESS,
+                   help="show the full traceback on errors")
+
+
+def overrides(args: argparse.Namespace) -> Dict[str, Any]:
+    keys = ("spp", "max_depth", "rr_depth", "threads", "seed")
+    return {k: getattr(args, k) for k in keys if getattr(args, k, None) is not None}
+
+
+def fmt_rate(x: float) -> str:
+    for unit, scale in (("G", 1e9), ("M", 1e6), ("k", 1e3)):
+        if x >= scale:
+            return f"{x / scale:.2f} {unit}"
+    return f"{x:.0f} "
+
+
+def say(text: str) -> None:
+    """Prints progress to stdout; a closed pipe (`synthgen ... | head`) silences the
+    output instead of aborting the render."""
+    try:
+        print(text, flush=True)
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+
+
+def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str, Any], out_dir: str,
+                      label: str) -> int:
+    from ..outputs.render import make_meta, write_outputs
+    from ..scene.scene_file import validate_render_settings
+
+    settings = validate_render_settings(settings, "command line")
+    cam = scene.camera
+    n_obj, n_light = len(scene_meta.get("objects", [])), len(scene_meta.get("lights", []))
+    say(f"{label}: {n_obj} object{'s' if n_obj != 1 else ''}, {n_light} light{'s' if n_light != 1 else ''}, "
+         f"{cam.width}x{cam.height}, {settings['spp']} spp, max depth {settings['max_depth']}, "
+         f"seed {settings['seed']}")
+    result = scene.render(**settings)
+    stats = result.stats
+    say(f"rendered in {stats['wall_time_s']:.2f} s: {fmt_rate(stats['samples_per_s'])}samples/s, "
+         f"{fmt_rate(stats['rays_per_s'])}rays/s ({stats['threads']} threads)")
+    if stats.get("nan_samples"):
+        print(f"warning: {stats['nan_samples']} NaN/infinite samples were discarded", file=sys.stderr)
+    meta = make_meta(camera=cam, settings=settings, stats=stats, scene=scene_meta)
+    paths = write_outputs(out_dir, result, meta)
+    for path in paths.values():
+        say(f"wrote {path}")
+    return EXIT_OK
+
+
+def one_line(e: BaseException) -> str:
+    text = str(e).strip() or type(e).__name__
+    return " ".join(text.split("\n"))

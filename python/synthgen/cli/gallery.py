@@ -1,0 +1,26 @@
+"""``synthgen gallery``: render the wear gallery."""
+from __future__ import annotations
+
+import argparse
+import os
+
+from . import Command, register
+from .common import EXIT_OK, positive_int
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-o", "--output", metavar="FILE.png", default=os.path.join("out", "gallery.png"))
+    p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel of each tile (default 32)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..scene import gallery
+
+    os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
+    print(gallery.write_gallery(args.output, spp=args.spp))
+    return EXIT_OK
+
+
+register(Command("gallery", "render the wear gallery",
+                 "Render every wear effect on a sign, a car body panel and a sphere, with the parameters under each "
+                 "tile.", add_arguments, run, order=70, module=__name__))

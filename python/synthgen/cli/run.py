@@ -1,0 +1,38 @@
+"""``synthgen run SCENARIO.yaml -o DIR``: render a scenario into a labelled dataset."""
+from __future__ import annotations
+
+import argparse
+
+from . import Command, register
+from .common import EXIT_INTERRUPTED, positive_int
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", metavar="SCENARIO.yaml", help="scenario file (see scenarios/default.yaml)")
+    p.add_argument("-o", "--output", metavar="DIR", required=True, help="output directory")
+    p.add_argument("-n", "--count", type=positive_int, metavar="N", help="frames (default: the scenario's count)")
+    p.add_argument("--workers", type=positive_int, default=1, metavar="N",
+                   help="worker processes on this machine (default 1)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address (tcp://host:8786): run there")
+    p.add_argument("--resume", action="store_true", help="render only the frames missing from DIR")
+    p.add_argument("--only", type=int, nargs="+", metavar="K", help="(re-)render just these frames")
+    p.add_argument("--recycle", type=positive_int, default=200, metavar="N",
+                   help="replace a worker process after N frames (default 200)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..run import run as run_scenario
+
+    summary = run_scenario(args.scenario, args.output, count=args.count, workers=args.workers,
+                           scheduler=args.scheduler, resume=args.resume, only=args.only, recycle=args.recycle,
+                           progress=not args.no_progress)
+    print(summary.text())
+    if summary["interrupted"]:
+        return EXIT_INTERRUPTED
+    return 0 if not summary["failures"] else 1
+
+
+register(Command("run", "render a scenario into a labelled dataset",
+                 "Render the frames of a scenario file into a dataset: images, depth, instance and semantic masks, "
+                 "COCO / YOLO / KITTI labels, per-frame metadata.", add_arguments, run, order=30, module=__name__))

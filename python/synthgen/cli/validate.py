@@ -1,0 +1,24 @@
+"""``synthgen validate SCENARIO.yaml``: check a scenario without rendering."""
+from __future__ import annotations
+
+import argparse
+
+from . import Command, register
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", metavar="SCENARIO.yaml")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..scenario import load_scenario
+
+    sc = load_scenario(args.scenario)
+    print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "
+          f"classes: {', '.join(sc.class_names)})")
+    return 0
+
+
+register(Command("validate", "check a scenario file without rendering",
+                 "Validate a scenario file: every error names file, line, column and key.", add_arguments, run,
+                 order=50, module=__name__))

@@ -1,0 +1,10 @@
+"""Frames: a worker turns one scenario frame into arrays and metadata.
+
+- :mod:`.renderer` -- :class:`FrameRenderer`, the orchestration of a frame (sample, set up,
+  place, render, record);
+- :mod:`.resources` -- what a worker keeps across frames (meshes, instance pools) and what
+  lives one frame (generated textures and materials);
+- :mod:`.layout` -- placement with visibility checks (label-only renders, amodal masks);
+- :mod:`.records` -- placed objects, the frame's camera and the per-object metadata.
+"""
+from .renderer import FrameRenderer, light_plugin  # noqa: F401

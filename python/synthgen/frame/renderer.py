@@ -1,0 +1,206 @@
+"""The per-worker frame renderer: one scenario frame -> arrays, metadata and timings.
+
+A :class:`FrameRenderer` owns one Scene for a worker's life: the ground and every mesh are
+added once (BVHs built once), instance ids come from pools reused frame after frame, object
+material slots are updated in place, lights are replaced. Each frame is a pure function of
+(scenario, frame index): its parameters come from :func:`synthgen.scenario.sample_frame`,
+its object randomness from per-object generators, its render seed from (seed, frame), and
+what the worker rendered before never changes the result.
+"""
+from __future__ import annotations
+
+import math
+import time
+from typing import Any, Dict, List, Mapping, Optional, Tuple
+
+import numpy as np
+
+from .._core import Scene
+from .. import post, randomize
+from ..outputs.render import camera_meta
+from ..scenario import Scenario, frame_rng, sample_frame
+from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
+from ..scene import primitives as P
+from .layout import FrameView, amodal_pixels, search_layout
+from .records import PlacedObject, frame_camera, object_records
+from .resources import FrameLibrary, Pool, Shape, Shapes
+
+__all__ = ["FrameRenderer", "light_plugin"]
+
+
+def light_plugin(light: PluginSpec) -> Tuple[str, Dict[str, Any]]:
+    """(plugin name, parameters) of a sampled light; an envmap's asset id becomes its file."""
+    params = dict(light.params)
+    if "asset" in params:
+        from ..scene import assets
+
+        params["file"] = assets.resolve(params.pop("asset"))
+    return light.type, params
+
+
+class FrameRenderer:
+    """Renders frames of one scenario, keeping the scene across frames (see the module
+    docstring)."""
+
+    def __init__(self, scenario: Scenario, threads: int = 0):
+        self.sc = scenario
+        self.threads = int(threads)
+        self.scene = Scene()
+        self.shapes = Shapes(self.scene)
+        self.pool = Pool()                # object instances, id k for the frame's object k
+        self.decor = Pool()               # unlabelled posts and poles below signs and plates
+        self.slots: List[int] = []        # material slot k of object k, updated in place
+        self.library = FrameLibrary(self.scene)   # this frame's generated textures and materials
+        self.lights: List[int] = []
+        self.ground: Optional[int] = None
+        self.ground_material: Optional[int] = None
+        self.pole_material: Optional[int] = None
+        g = scenario.spec["ground"]
+        if g["enabled"]:
+            pl = P.plane(float(g["size"]), float(g["size"]))
+            gm = self.scene.add_mesh(pl["positions"], pl["indices"], normals=pl["normals"], uvs=pl["uvs"], name="ground")
+            self.ground = self.scene.add_instance(gm, np.eye(4), class_id=0, instance_id=0)
+
+    def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
+        """(arrays, meta, timings) of one frame."""
+        t0 = time.perf_counter()
+        sc = self.sc
+        spec = sample_frame(sc, frame)
+        camera = frame_camera(spec.camera, sc.resolution, frame_rng(sc.seed, frame, 2))
+        self._set_lights(spec.lights)
+        self._set_ground(spec)
+        objects = self._set_objects(spec)
+        t_update = time.perf_counter()
+
+        view = FrameView(self.scene, objects, self.decor.ids, self.ground, sc.resolution, self.threads)
+        layout = search_layout(view, camera, sc.spec["placement"], frame_rng(sc.seed, frame, 1))
+        keep = layout.kept()
+        t_layout = time.perf_counter()
+
+        amodal = {k: amodal_pixels(view, camera, k) for k in range(len(objects)) if keep[k]}
+        view.show(keep)
+        self.scene.set_camera(camera)
+        self.scene.commit()
+        rs = sc.spec["render"]
+        render_seed = int(np.random.SeedSequence([sc.seed, int(frame), 3]).generate_state(1, np.uint64)[0])
+        res = self.scene.render(spp=rs["spp"], max_depth=rs["max_depth"], rr_depth=rs["rr_depth"], seed=render_seed,
+                                threads=self.threads)
+        t_render = time.perf_counter()
+
+        arrays = {"rgb": np.asarray(res.rgb), "depth": np.asarray(res.depth),
+                  "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id)}
+        if spec.post:
+            arrays = post.apply_steps(arrays, [(p.type, p.params) for p in spec.post])
+        meta = {
+            "format": "synthgen-dataset-frame", "format_version": 1, "frame": int(frame),
+            "scenario_seed": sc.seed, "render_seed": render_seed, "scenario_sha256": sc.sha256,
+            "image_size": list(sc.resolution), "camera": camera_meta(camera),
+            "render": dict(rs), "layout_attempts": layout.attempts,
+            "lights": [dict(zip(("type", "params"), light_plugin(li))) for li in spec.lights],
+            "objects": object_records(objects, keep, layout.dropped, amodal, arrays["instance_id"], camera,
+                                      sc.class_names),
+            "sampled": spec.sampled, "class_names": list(sc.class_names),
+        }
+        if spec.post:
+            meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]
+        timings = {"update_s": t_update - t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
+        return arrays, meta, timings
+
+    # -- scene set-up of one frame --------------------------------------------------------
+    def _set_lights(self, lights: List[PluginSpec]) -> None:
+        for lid in self.lights:
+            self.scene.remove_light(lid)
+        self.lights = [self.scene.add_light(*light_plugin(li)) for li in lights]
+
+    def _set_ground(self, spec: FrameSpec) -> None:
+        if self.ground is None:
+            return
+        if self.ground_material is None:
+            self.ground_material = self.scene.add_material("diffuse", {})
+        m = spec.ground.material
+        self.scene.update_material(self.ground_material, m.type, m.params)
+        self.scene.set_instance_material(self.ground, self.ground_material)
+
+    def _slot_material(self, k: int, m: PluginSpec) -> int:
+        while len(self.slots) <= k:
+            self.slots.append(self.scene.add_material("diffuse", {}))
+        self.scene.update_material(self.slots[k], m.type, m.params)
+        return self.slots[k]
+
+    def _set_objects(self, spec: FrameSpec) -> List[PlacedObject]:
+        """Shapes, materials (with what the randomizers make of them) and instances of the
+        frame's objects; posts for signs and plates; the previous frame's generated textures
+        and materials removed."""
+        for inst in self.pool.beyond(len(spec.objects)):
+            self.scene.set_instance_visible(inst, False)
+            self.scene.set_instance_material(inst, -1)
+        previous, self.library = self.library, FrameLibrary(self.scene)
+        objects = []
+        n_decor = 0
+        for o in spec.objects:
+            placed = self._set_object(spec, o)
+            if placed.mount_height is not None:
+                placed.decor, n_decor = n_decor, n_decor + 1
+            objects.append(placed)
+        pole_mesh = self.shapes.get("primitive", "box").mesh_id
+        if self.pole_material is None:
+            self.pole_material = self.scene.add_material("conductor", {"metal": "iron", "roughness": 0.5})
+        for d in range(n_decor):
+            self.decor.take(d, lambda: self.scene.add_instance(pole_mesh, np.eye(4), class_id=0, instance_id=0,
+                                                               material_id=self.pole_material))
+        for d in self.decor.beyond(n_decor):
+            self.scene.set_instance_visible(d, False)
+        # The previous frame's generated textures and materials are unused now.
+        previous.release()
+        return objects
+
+    def _set_object(self, spec: FrameSpec, o: ObjectSpec) -> PlacedObject:
+        k = o.index
+        kind, value = o.shape
+        shape = self.shapes.get(kind, value)
+        local, radius, dims, mount = self._local(o, shape)
+        rng = frame_rng(spec.seed, spec.frame, 100 + k)
+        mat = -1
+        if kind not in ("primitive", "mesh", "asset"):
+            pass  # a shape randomizer makes the material
+        elif o.material is not None:
+            mat = self._slot_material(k, o.material)
+        elif not shape.own_materials:
+            mat = self._slot_material(k, PluginSpec("diffuse", {"albedo": [0.5, 0.5, 0.5]}))
+        ctx = randomize.ObjectContext(self.library, rng, o, shape.lo, shape.hi)
+        done = {}
+        for r in randomize.randomizers(by="apply_order"):
+            value = o.randomizers.get(r.key)
+            if value is not None:
+                mat, info = r.apply(ctx, value, mat)
+                if info is not None:
+                    done[r.key] = info
+        inst, existed = self.pool.take(k, lambda: self.scene.add_instance(
+            shape.mesh_id, np.eye(4), class_id=o.class_index + 1, instance_id=k + 1, material_id=mat))
+        if existed:
+            self.scene.set_instance_mesh(inst, shape.mesh_id)
+            self.scene.set_instance_material(inst, mat)
+            self.scene.set_instance_labels(inst, o.class_index + 1, k + 1)
+        info = {r.key: done[r.key] for r in randomize.randomizers() if r.key in done}
+        return PlacedObject(o, shape, inst, local, radius, dims, mount, info=info)
+
+    def _local(self, o: ObjectSpec, shape: Shape) -> Tuple[np.ndarray, float, np.ndarray, Optional[float]]:
+        """(object_from_shape scale and lift, footprint radius, box size in metres, mount
+        height of a post or None)."""
+        kind, value = o.shape
+        if kind not in ("primitive", "mesh", "asset"):
+            return randomize.randomizer(kind).placement(value, o.scale)
+        size = np.asarray(o.size, np.float64) * o.scale
+        if shape.own_materials:  # meshes keep their proportions: size is a per-axis scale factor
+            dims = (shape.hi - shape.lo) * shape.unit * size  # in metres (manifest `scale`)
+        else:
+            dims = size.copy()
+            if value == "sphere":
+                dims = np.full(3, size[0])
+        s = dims / np.maximum(shape.hi - shape.lo, 1e-12)
+        centre = 0.5 * (shape.lo + shape.hi)
+        # Scale about the bounds' centre, then lift so the lowest point touches y = 0.
+        m = np.eye(4)
+        m[:3, :3] = np.diag(s)
+        m[:3, 3] = -centre * s + np.array([0.0, 0.5 * dims[1], 0.0])
+        return m, 0.5 * math.hypot(dims[0], dims[2]), dims, None

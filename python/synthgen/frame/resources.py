@@ -1,0 +1,125 @@
+"""What a worker keeps in its scene across frames, and what lives for one frame only.
+
+- :class:`Shapes`: every mesh is added once (one BVH build per worker): primitives, files,
+  assets and the meshes of shape randomizers (signs, plates), with their bounds;
+- :class:`FrameLibrary`: a facade of the scene that records the textures and materials made
+  for one frame (generated signs, plates, decals, wear) so that they are removed when the
+  next frame is set up, newest first; the library stays bounded over a long run;
+- :class:`Pool`: instance ids reused frame after frame (id k for the frame's object k, so
+  instance order -- and with it every light list -- is the same on every worker whatever
+  it rendered before); ids beyond the frame's objects are hidden.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+import numpy as np
+
+from .._core import Scene
+from .. import randomize
+from ..scene import primitives as P
+
+__all__ = ["Shape", "Shapes", "FrameLibrary", "Pool"]
+
+
+class Shape:
+    """A mesh in the worker's scene with its object-space bounds."""
+
+    def __init__(self, mesh_id: int, lo: np.ndarray, hi: np.ndarray, own_materials: bool, unit: float = 1.0):
+        self.mesh_id, self.lo, self.hi, self.own_materials = mesh_id, lo, hi, own_materials
+        self.unit = unit  #: metres per mesh unit (an asset's manifest `scale`)
+
+
+class Shapes:
+    """The meshes of a worker, made on first use."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self._shapes: Dict[Tuple[str, Any], Shape] = {}
+
+    def get(self, kind: str, value: Any) -> Shape:
+        """The shape of ``(kind, value)``: ("primitive", "box" | "sphere"), ("mesh", path),
+        ("asset", id) or (randomizer key, sampled value) of a shape randomizer."""
+        key = (kind, value) if kind in ("primitive", "mesh", "asset") else (kind, None)
+        if key not in self._shapes:
+            self._shapes[key] = self._make(*key)
+        return self._shapes[key]
+
+    def _make(self, kind: str, value: Any) -> Shape:
+        scene = self.scene
+        if kind in ("mesh", "asset"):
+            unit, path = 1.0, value
+            if kind == "asset":
+                from ..scene import assets
+
+                path = assets.resolve(value)
+                unit = float(assets.entry(value).get("scale", 1.0))
+            r = scene.load_mesh_file(path)
+            pos = np.asarray(scene.mesh_arrays(r["mesh_id"])["positions"], np.float64)
+            return Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True, unit)
+        if kind == "primitive":
+            m = P.box((1.0, 1.0, 1.0)) if value == "box" else P.uv_sphere(0.5, 48, 24)
+            mid = scene.add_mesh(m["positions"], m["indices"], normals=m["normals"], uvs=m["uvs"], name=value)
+            return Shape(mid, np.full(3, -0.5), np.full(3, 0.5), False)
+        mid, lo, hi = randomize.randomizer(kind).make_shape(scene)
+        return Shape(mid, lo, hi, False)
+
+
+class FrameLibrary:
+    """A Scene facade that records the ids of the textures and materials added through it
+    (the per-frame resources, removed when the next frame is set up)."""
+
+    def __init__(self, scene: Scene):
+        self._scene = scene
+        self._textures: List[int] = []
+        self._materials: List[int] = []
+
+    def add_texture(self, *a: Any, **k: Any) -> int:
+        i = self._scene.add_texture(*a, **k)
+        self._textures.append(i)
+        return i
+
+    def add_image_texture(self, *a: Any, **k: Any) -> int:
+        i = self._scene.add_image_texture(*a, **k)
+        self._textures.append(i)
+        return i
+
+    def add_material(self, *a: Any, **k: Any) -> int:
+        i = self._scene.add_material(*a, **k)
+        self._materials.append(i)
+        return i
+
+    def remove_texture(self, texture_id: int) -> None:
+        self._scene.remove_texture(texture_id)
+        if texture_id in self._textures:
+            self._textures.remove(texture_id)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._scene, name)
+
+    def release(self) -> None:
+        """Removes everything recorded (newest first: mixes before what they mix)."""
+        for mid in reversed(self._materials):
+            self._scene.remove_material(mid)
+        for tid in reversed(self._textures):
+            self._scene.remove_texture(tid)
+        self._materials, self._textures = [], []
+
+
+class Pool:
+    """Instance ids reused across frames; :meth:`take` returns the instance for slot ``k``
+    (adding one with ``make`` when the pool is too small)."""
+
+    def __init__(self) -> None:
+        self.ids: List[int] = []
+
+    def take(self, k: int, make: Callable[[], int]) -> Tuple[int, bool]:
+        """(instance id of slot k, whether it already existed)."""
+        if k < len(self.ids):
+            return self.ids[k], True
+        self.ids.append(make())
+        return self.ids[-1], False
+
+    def beyond(self, n: int) -> List[int]:
+        """The ids of slots n and above (unused this frame)."""
+        return self.ids[n:]

@@ -1,0 +1,46 @@
+"""Outputs: what a frame becomes on disk (pure functions: arrays + metadata -> files).
+
+A dataset directory (frame k is ``{k:06d}``)::
+
+    images/000000.png        sRGB 8-bit (rgb)           images/000000.exr  linear float (rgb_exr)
+    depth/000000.exr         camera z in metres, float32, +inf on background (depth)
+    depth16/000000.png       uint16 millimetres, 0 = no surface or beyond 65.535 m (depth16)
+    instance/000000.png      uint16 instance ids (1..N per frame, 0 = background/ground)
+    semantic/000000.png      uint16 class ids (1 + index in the scenario's class list)
+    labels/000000.txt        YOLO; dataset.yaml names the classes (yolo)
+    kitti/000000.txt         KITTI 2D labels (+ 3D fields in the camera frame) (kitti)
+    meta/000000.json         seed, every sampled parameter, objects (boxes, occlusion,
+                             truncation, pose), the frame's COCO records; written last
+    annotations/coco.json    assembled from meta/*.json at the end of a run (coco)
+
+One module per format registers its output kinds (:mod:`.registry`): ``images`` (rgb,
+rgb_exr), ``depth`` (depth, depth16), ``masks`` (instance, semantic), ``coco``, ``yolo``,
+``kitti``, ``meta``. Adding a format is one module here (found by :func:`discover`) plus its
+test. Infrastructure: :mod:`.registry`, :mod:`.files` (atomic writers), :mod:`.render` (the
+files of ``synthgen render``), :mod:`.verify` (``synthgen verify``).
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from typing import List
+
+from .registry import (Frame, OutputKind, default_outputs, finalize_dataset, frame_name, kind,  # noqa: F401
+                       kind_names, kinds, register, write_frame)
+
+#: Modules of this package that are not output formats.
+INFRASTRUCTURE = ("registry", "files", "render", "verify")
+
+
+def format_modules() -> List[str]:
+    """Names of the format modules (every module of the package but the infrastructure)."""
+    return sorted(m.name for m in pkgutil.iter_modules(__path__) if m.name not in INFRASTRUCTURE)
+
+
+def discover() -> None:
+    """Imports every format module, which registers its kinds."""
+    for name in format_modules():
+        importlib.import_module(f"{__name__}.{name}")
+
+
+discover()

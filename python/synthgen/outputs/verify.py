@@ -1,0 +1,90 @@
+"""``synthgen verify``: a dataset's labels agree with its masks.
+
+For every complete frame, each COCO annotation decodes to exactly the pixels of its instance
+in ``instance/*.png``, bbox and area are the mask's, the semantic mask holds its category
+there, every visible instance is labelled once, and the YOLO and KITTI files hold the same
+boxes and classes.
+"""
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, List
+
+import numpy as np
+
+from .._core import SynthgenError
+from .coco import mask_bbox, rle_decode
+from .kitti import parse_kitti
+from .meta import completed_frames
+from .registry import frame_name
+from .yolo import parse_yolo
+
+__all__ = ["verify_dataset"]
+
+
+def _read_u16(path: str) -> np.ndarray:
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(path)
+    if buf.has_error:
+        raise SynthgenError(f"{path}: {buf.geterror()}")
+    return np.asarray(buf.get_pixels(oiio.UINT16))[..., 0].astype(np.int64)
+
+
+def verify_dataset(out_dir: str) -> Dict[str, Any]:
+    """Checks that the labels of a dataset agree with its masks: for every complete frame,
+    each COCO annotation decodes to exactly the pixels of its instance in instance/*.png,
+    bbox and area are the mask's, the semantic mask holds its category there, every visible
+    instance is labelled once, and the YOLO and KITTI files hold the same boxes and classes.
+    Returns counts; raises SynthgenError naming the first disagreement."""
+    import json
+
+    def fail(msg: str) -> None:
+        raise SynthgenError(f"{out_dir}: {msg}")
+
+    with open(os.path.join(out_dir, "annotations", "coco.json"), encoding="utf-8") as f:
+        coco = json.load(f)
+    names = [c["name"] for c in coco["categories"]]
+    by_image: Dict[int, List[Dict[str, Any]]] = {}
+    for a in coco["annotations"]:
+        by_image.setdefault(a["image_id"], []).append(a)
+    frames = completed_frames(out_dir)
+    if sorted(im["id"] for im in coco["images"]) != frames:
+        fail("annotations/coco.json does not list exactly the complete frames")
+    n_ann = 0
+    for k in frames:
+        name = frame_name(k)
+        ids = _read_u16(os.path.join(out_dir, "instance", name + ".png"))
+        h, w = ids.shape
+        sem_path = os.path.join(out_dir, "semantic", name + ".png")
+        sem = _read_u16(sem_path) if os.path.isfile(sem_path) else None
+        anns = sorted(by_image.get(k, []), key=lambda a: a["instance_id"])
+        present = sorted(int(i) for i in np.unique(ids) if i != 0)
+        if [a["instance_id"] for a in anns] != present:
+            fail(f"frame {k}: COCO labels instances {[a['instance_id'] for a in anns]}, mask shows {present}")
+        yolo_path = os.path.join(out_dir, "labels", name + ".txt")
+        kitti_path = os.path.join(out_dir, "kitti", name + ".txt")
+        yolo = parse_yolo(open(yolo_path).read(), w, h) if os.path.isfile(yolo_path) else None
+        kitti = parse_kitti(open(kitti_path).read()) if os.path.isfile(kitti_path) else None
+        for lst, what in ((yolo, "YOLO"), (kitti, "KITTI")):
+            if lst is not None and len(lst) != len(anns):
+                fail(f"frame {k}: {what} has {len(lst)} objects, COCO {len(anns)}")
+        for j, a in enumerate(anns):
+            m = ids == a["instance_id"]
+            if not np.array_equal(rle_decode(a["segmentation"]), m):
+                fail(f"frame {k}: the RLE of instance {a['instance_id']} is not its mask")
+            if a["area"] != int(m.sum()) or a["bbox"] != mask_bbox(m):
+                fail(f"frame {k}: area/bbox of instance {a['instance_id']} differ from its mask")
+            if sem is not None and set(np.unique(sem[m]).tolist()) != {a["category_id"]}:
+                fail(f"frame {k}: semantic mask disagrees with category of instance {a['instance_id']}")
+            if yolo is not None:
+                c, box = yolo[j]
+                if c != a["category_id"] - 1 or np.max(np.abs(np.subtract(box, a["bbox"]))) > 1e-3 * max(w, h):
+                    fail(f"frame {k}: YOLO line {j + 1} differs from COCO annotation {a['id']}")
+            if kitti is not None:
+                kt = kitti[j]
+                if kt["type"] != names[a["category_id"] - 1].replace(" ", "_") or \
+                        np.max(np.abs(np.subtract(kt["bbox"], a["bbox"]))) > 0.01:
+                    fail(f"frame {k}: KITTI line {j + 1} differs from COCO annotation {a['id']}")
+            n_ann += 1
+    return {"frames": len(frames), "annotations": n_ann, "categories": names}

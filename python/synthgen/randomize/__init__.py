@@ -1,0 +1,110 @@
+"""Object randomizers: what a scenario can do to each object beyond its shape and
+material -- road signs, licence plates, decals, wear.
+
+A randomizer owns one key of a scenario's ``objects[]`` entries (its schema, every leaf a
+distribution) and, per object and frame, changes the object: its material (wrapped in wear,
+layered with decals, generated for a sign or a plate), and for the randomizers that *are*
+the object (``sign``, ``plate``) its shape, size and mounting post. What it did goes into the
+frame's metadata under its key.
+
+Protocol (:class:`Randomizer`):
+
+- ``key``, ``schema`` -- the scenario key and its schema;
+- ``sample_order`` -- the key's position in ``objects[]`` (distributions are drawn in this
+  order) and in the metadata; ``apply_order`` -- the order in which randomizers change an
+  object's material (a plate or sign first, decals before wear);
+- ``shape``: for randomizers that are the object (one of ``primitive`` / ``mesh`` /
+  ``asset`` / ...): :meth:`Randomizer.make_shape` and :meth:`Randomizer.placement`;
+- :meth:`Randomizer.apply` -- returns the object's new material id and its metadata record.
+
+Adding a randomizer is one module here (found by :func:`discover`, registered with
+:func:`register`) plus its test; the scenario schema, the order of application and the
+docs follow from the registry.
+"""
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from dataclasses import dataclass
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple
+
+import numpy as np
+
+from .._core import SynthgenError
+from ..schema.fields import Field
+
+__all__ = ["Randomizer", "ObjectContext", "register", "randomizers", "randomizer", "discover",
+           "randomizer_modules", "INFRASTRUCTURE"]
+
+
+@dataclass
+class ObjectContext:
+    """What a randomizer may use while it changes one object of one frame."""
+
+    scene: Any                    #: the frame's scene facade (records per-frame textures / materials)
+    rng: np.random.Generator      #: the object's generator: a pure function of (seed, frame, object)
+    spec: Any                     #: the sampled object (synthgen.scenario.ObjectSpec)
+    shape_lo: np.ndarray          #: object-space bounds of the object's shape
+    shape_hi: np.ndarray
+
+
+class Randomizer:
+    """Base class of the object randomizers (see the module docstring)."""
+
+    key: str = ""
+    schema: Field
+    sample_order: int = 0
+    apply_order: int = 0
+    #: True for randomizers that are the object itself (a sign, a plate): they make its shape.
+    shape: bool = False
+
+    def make_shape(self, scene: Any) -> Tuple[int, np.ndarray, np.ndarray]:
+        """(mesh id, object-space lo, hi) of the object's mesh (``shape`` randomizers; the
+        mesh is made once per worker and shared by every object of this randomizer)."""
+        raise NotImplementedError
+
+    def placement(self, value: Mapping[str, Any], scale: float) -> Tuple[np.ndarray, float, np.ndarray, float]:
+        """(object_from_shape 4x4, footprint radius, box dimensions, mount height) of an
+        object (``shape`` randomizers); the mount height (>= 0) puts a post below it."""
+        raise NotImplementedError
+
+    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], material: int) -> Tuple[int, Any]:
+        """Changes the object: returns its new material id (``material`` < 0: the mesh's own
+        materials) and what to record in the metadata under :attr:`key` (None: nothing)."""
+        raise NotImplementedError
+
+
+_REGISTRY: Dict[str, Randomizer] = {}
+
+#: Modules of this package that are not randomizers.
+INFRASTRUCTURE: Tuple[str, ...] = ()
+
+
+def register(r: Randomizer) -> Randomizer:
+    """Adds a randomizer (called by its module at import)."""
+    if not r.key or r.key in _REGISTRY:
+        raise SynthgenError(f"randomizer {r.key!r} has no key or is registered twice")
+    _REGISTRY[r.key] = r
+    return r
+
+
+def randomizers(by: str = "sample_order") -> List[Randomizer]:
+    """Every randomizer, by ``sample_order`` (schema and metadata order) or ``apply_order``."""
+    return sorted(_REGISTRY.values(), key=lambda r: getattr(r, by))
+
+
+def randomizer(key: str) -> Randomizer:
+    return _REGISTRY[key]
+
+
+def randomizer_modules() -> List[str]:
+    return sorted(m.name for m in pkgutil.iter_modules(__path__) if m.name not in INFRASTRUCTURE)
+
+
+def discover() -> None:
+    """Imports every randomizer module, which registers its randomizer."""
+    for name in randomizer_modules():
+        importlib.import_module(f"{__name__}.{name}")
+
+
+discover()

@@ -1,0 +1,89 @@
+"""Randomizer ``decals``: images projected onto the object's front (its -z side) from a
+projector in object space -- image files, generated sign pictograms or licence plates --
+over its material, before wear. Each decal's kind, text and size go into the metadata."""
+from __future__ import annotations
+
+import os
+from typing import Any, Dict, List, Mapping, Tuple
+
+import numpy as np
+
+from .._core import SynthgenError
+from ..schema.fields import REQUIRED, Choice, FilePath, ListOf, Number, Record, String
+from ..schema.random import R
+from ..scene import plates, signs, wear
+from . import ObjectContext, Randomizer, register
+
+DECAL = Record({
+    "image": FilePath(None, doc="an image file (PNG with alpha, JPEG, EXR)"),
+    "pictogram": Record({"family": R(Choice(list(signs.FAMILIES), REQUIRED)),
+                         "text": R(String(None))}, default=None, doc="a generated sign pictogram"),
+    "plate": Record({"country": R(Choice(list(plates.COUNTRIES), REQUIRED))}, default=None,
+                    doc="a generated licence plate"),
+    "probability": Number(1.0, min=0.0, max=1.0, doc="chance that an instance gets the decal"),
+    "size": R(Number(0.4, min=0.01, max=1.0, doc="decal width as a fraction of the object's width")),
+    "height": R(Number(0.5, min=0.0, max=1.0, doc="decal centre height, fraction of the object's height")),
+}, one_of=[("image", "pictogram", "plate")], doc="an image projected onto the object's front (-z side)")
+
+SCHEMA = ListOf(DECAL, [], doc="decals projected onto the front, before wear")
+
+
+def image_aspect(path: str) -> float:
+    """Width / height of an image file (its header, through OpenImageIO)."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise SynthgenError(f"{path}: cannot read the image: {oiio.geterror()}")
+    spec = inp.spec()
+    inp.close()
+    return float(spec.width) / float(max(spec.height, 1))
+
+
+class Decals(Randomizer):
+    key = "decals"
+    schema = SCHEMA
+    sample_order = 40
+    apply_order = 30
+
+    def apply(self, ctx: ObjectContext, value: Any, material: int) -> Tuple[int, Any]:
+        if not value:
+            return material, None
+        rng = ctx.rng
+        mat = material
+        if mat < 0:
+            mat = ctx.scene.add_material("diffuse", {"albedo": 0.5})
+        lo, hi = np.asarray(ctx.shape_lo, np.float64), np.asarray(ctx.shape_hi, np.float64)
+        ext = np.maximum(hi - lo, 1e-6)
+        centre = 0.5 * (lo + hi)
+        done: List[Dict[str, Any]] = []
+        for d in value:
+            if float(rng.random()) >= float(d["probability"]):
+                continue
+            if d.get("plate") is not None:
+                reg = plates.random_registration(d["plate"]["country"], rng)
+                w_mm, h_mm = plates.SIZE_MM[reg["country"]]
+                image, aspect = np.asarray(plates.render_plate(reg, px_per_mm=1.0)["rgb"], np.float32), w_mm / h_mm
+                info: Dict[str, Any] = {"kind": "plate", "country": reg["country"], "text": reg["text"]}
+            elif d.get("pictogram") is not None:
+                sg_ = signs.render_sign(d["pictogram"]["family"], d["pictogram"].get("text"), 128)
+                image, aspect = np.asarray(signs.on_background(sg_["rgba"]), np.float32), 1.0
+                info = {"kind": "pictogram", "class_name": sg_["class_name"]}
+            else:
+                image, aspect = d["image"], image_aspect(d["image"])
+                info = {"kind": "image", "file": os.path.basename(d["image"])}
+            width = float(d["size"]) * float(ext[0])
+            cy = float(lo[1] + float(d["height"]) * ext[1])
+            dist = 2.0 * float(ext.max()) + 1e-3
+            target = [float(centre[0]), cy, float(centre[2])]
+            position = [float(centre[0]), cy, float(lo[2]) - dist]
+            fov = float(np.degrees(2.0 * np.arctan(0.5 * width / aspect / (dist + 0.5 * ext[2]))))
+            mat = wear.decal(ctx.scene, mat, image, position=position, look_at=target, fov=max(fov, 0.1),
+                             aspect=aspect, occlusion=False, space="object")
+            # The decal's size on the object's front (object units): the image keeps its aspect.
+            info["size"] = [round(width, 6), round(width / aspect, 6)]
+            done.append(info)
+        return mat, done
+
+
+register(Decals())

@@ -1,0 +1,80 @@
+"""Randomizer ``wear``: rust, dirt, scratches and ice over the object's material (the
+:mod:`synthgen.scene.wear` presets), each with its own probability per instance; the
+effects applied and their parameters (seeds included) go into the metadata."""
+from __future__ import annotations
+
+from typing import Any, Dict, Mapping, Tuple
+
+from ..schema.fields import REQUIRED, Choice, Field, Integer, ListOf, Number, Record, Vector
+from ..schema.random import R
+from ..scene import wear
+from . import ObjectContext, Randomizer, register
+
+#: The effects, in the order they are applied.
+EFFECTS = ("rust", "dirt", "scratches", "ice")
+
+
+def _wear_effect(params: Dict[str, Field]) -> Record:
+    return Record(dict({"probability": Number(1.0, min=0.0, max=1.0, doc="chance that an instance gets the effect"),
+                        "amount": R(Number(0.35, min=0.0, max=1.0, doc="covered fraction")),
+                        "seed": R(Integer(None, min=0, max=(1 << 31) - 1, doc="pattern seed (default: drawn)"))},
+                       **params), default=None)
+
+
+_RAMP_STOP = Record({"position": Number(REQUIRED, min=0.0, max=1.0, doc="position in the ramp"),
+                     "color": R(Vector(3, REQUIRED, min=0.0, max=1.0, broadcast=True, doc="linear RGB at that position"))})
+
+SCHEMA = Record({
+    "rust": _wear_effect({"scale": R(Number(3.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(0.6, min=0.0, max=2.0)),
+                          "roughness": R(Number(0.85, min=0.0, max=1.0)), "bump": R(Number(0.002, min=0.0, max=0.05)),
+                          "colors": ListOf(_RAMP_STOP, None, min_items=1,
+                                           doc="colour ramp of the rust (default: dark brown to orange)")}),
+    "dirt": _wear_effect({"scale": R(Number(5.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(1.0, min=0.0, max=4.0)),
+                          "ao_radius": R(Number(0.3, min=0.0001, max=100.0, doc="crease search distance, metres")),
+                          "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)")),
+                          "color": R(Vector(3, (0.12, 0.09, 0.06), min=0.0, max=1.0, broadcast=True, doc="dirt colour (linear RGB)")),
+                          "roughness": R(Number(0.95, min=0.0, max=1.0))}),
+    "scratches": _wear_effect({"density": R(Number(8.0, min=0.001, max=10000.0)),
+                               "width": R(Number(0.04, min=0.0001, max=1.0)),
+                               "direction": R(Choice(["x", "y", "z"], None, doc="object axis the scratches run along "
+                                                                                 "(default: random directions)")),
+                               "elongation": R(Number(8.0, min=1.0, max=100.0, doc="cell stretch along direction")),
+                               "metal": R(Choice(["aluminium", "chrome", "copper", "gold", "iron", "silver"],
+                                                 "aluminium")),
+                               "roughness": R(Number(0.35, min=0.0, max=1.0)),
+                               "depth": R(Number(0.0, min=0.0, max=0.01, doc="groove depth in metres (tilts the "
+                                                                             "metal's normal; 0: flat)"))}),
+    "ice": _wear_effect({"scale": R(Number(4.0, min=0.001, max=1000.0)), "top_bias": R(Number(0.5, min=0.0, max=2.0)),
+                         "bump": R(Number(0.003, min=0.0, max=0.05))}),
+}, default=None, doc="wear effects (synthgen.wear presets), applied in the order rust, dirt, scratches, ice")
+
+
+class Wear(Randomizer):
+    key = "wear"
+    schema = SCHEMA
+    sample_order = 30
+    apply_order = 40
+
+    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], material: int) -> Tuple[int, Any]:
+        rng = ctx.rng
+        applied: Dict[str, Any] = {}
+        mat = material
+        if mat < 0:
+            mat = ctx.scene.add_material("diffuse", {"albedo": 0.5})
+        for effect in EFFECTS:
+            spec = value.get(effect)
+            if spec is None:
+                continue
+            if float(rng.random()) >= float(spec["probability"]):
+                continue
+            kw = {k: v for k, v in spec.items() if k not in ("probability", "seed") and v is not None}
+            if "colors" in kw:  # ramp stops {position, color} -> (position, (r, g, b))
+                kw["colors"] = sorted((float(c["position"]), tuple(float(x) for x in c["color"])) for c in kw["colors"])
+            seed = spec.get("seed")
+            kw["seed"] = int(seed) if seed is not None else int(rng.integers(0, 1 << 31))
+            mat = getattr(wear, effect)(ctx.scene, mat, **kw)
+            applied[effect] = kw
+        return mat, applied
+
+
+register(Wear())

@@ -1,0 +1,120 @@
+"""``synthgen run``: a scenario's frames -> a labelled dataset on disk.
+
+Every file is written to a temporary name and renamed; the metadata is written last and
+marks a frame complete, so ``--resume`` renders exactly the frames without it and a killed
+run leaves no partial file under a final name. Frames go to an executor
+(:mod:`synthgen.run.executors`) as tasks carrying the validated scenario; the dataset-level
+files (``annotations/coco.json``, ``dataset.yaml``) are written at the end from the
+per-frame metadata. The layout of the directory: :mod:`synthgen.outputs`.
+"""
+from __future__ import annotations
+
+import glob
+import os
+import time
+from typing import Any, Dict, List, Optional, Sequence
+
+from .. import outputs
+from .._core import SynthgenError
+from ..outputs.files import write_json
+from ..outputs.meta import completed_frames
+from ..scenario import load_scenario
+from .executors import DaskExecutor, LocalExecutor
+from .task import render_task
+
+__all__ = ["run", "RunSummary", "remove_temporaries"]
+
+
+def remove_temporaries(out_dir: str) -> int:
+    """Deletes temporary files left by an interrupted run; returns how many."""
+    n = 0
+    for p in glob.glob(os.path.join(out_dir, "*", ".*.tmp*")) + glob.glob(os.path.join(out_dir, ".*.tmp*")):
+        try:
+            os.unlink(p)
+            n += 1
+        except OSError:
+            pass
+    return n
+
+
+class RunSummary(dict):
+    """frames, failures (frame, reason), mean seconds per frame and per stage."""
+
+    def text(self) -> str:
+        lines = [f"frames rendered: {self['rendered']} (skipped as already complete: {self['skipped']}), "
+                 f"failures: {len(self['failures'])}"]
+        for f in self["failures"][:20]:
+            lines.append(f"  frame {f['frame']}: {f['error']}")
+        if self["rendered"]:
+            st = ", ".join(f"{k[:-2]} {v:.3f}" for k, v in self["stage_s"].items())
+            lines.append(f"mean seconds/frame: {self['mean_s_per_frame']:.3f} (per stage: {st}); "
+                         f"wall {self['wall_s']:.1f} s, {self['frames_per_s']:.3f} frames/s")
+        if self.get("interrupted"):
+            lines.append("interrupted: completed frames are kept; run again with --resume")
+        return "\n".join(lines)
+
+
+def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: int = 1,
+        scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
+        recycle: int = 200, progress: bool = True, threads: Optional[int] = None) -> RunSummary:
+    """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`)."""
+    sc = load_scenario(scenario_path)  # validate before anything renders
+    n = int(count) if count is not None else sc.count
+    frames = list(only) if only is not None else list(range(n))
+    os.makedirs(out_dir, exist_ok=True)
+    done = set(completed_frames(out_dir))
+    if done and not resume and only is None:
+        raise SynthgenError(f"{out_dir} already holds {len(done)} frame(s); use --resume to complete it "
+                            f"or choose another output directory")
+    removed = remove_temporaries(out_dir)
+    todo = [k for k in frames if not (resume and k in done)] if only is None else frames
+    if threads is None:
+        threads = max(1, (os.cpu_count() or 1) // max(1, workers)) if (workers > 1 or scheduler) else 0
+    if sc.spec["render"]["threads"]:
+        threads = sc.spec["render"]["threads"]
+    executor = DaskExecutor(scheduler) if scheduler is not None else LocalExecutor(workers, recycle)
+    args = [(sc, os.path.abspath(out_dir), k, threads) for k in todo]
+    results, failures = [], []
+    interrupted = False
+    t0 = time.perf_counter()
+    bar = None
+    if progress:
+        try:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(todo), unit="frame", desc="synthgen", dynamic_ncols=True)
+        except ImportError:
+            bar = None
+    try:
+        for r in executor.map(render_task, args):
+            (results if r["ok"] else failures).append(r)
+            if bar is not None:
+                bar.update(1)
+                if not r["ok"]:
+                    bar.write(f"frame {r['frame']} failed: {r['error']}")
+    except KeyboardInterrupt:
+        interrupted = True
+        executor.shutdown()
+    finally:
+        if bar is not None:
+            bar.close()
+        if scheduler is not None and not interrupted:
+            executor.shutdown()
+    wall = time.perf_counter() - t0
+    complete = completed_frames(out_dir)
+    outputs.finalize_dataset(out_dir, sc.spec["outputs"], sc.class_names,
+                             [k for k in complete if k < n or only is not None])
+    stages: Dict[str, float] = {}
+    for r in results:
+        for k, v in r["timings"].items():
+            stages[k] = stages.get(k, 0.0) + v
+    m = max(1, len(results))
+    summary = RunSummary(
+        rendered=len(results), skipped=len(frames) - len(todo), failures=[{"frame": f["frame"], "error": f["error"]}
+                                                                         for f in failures],
+        wall_s=wall, frames_per_s=len(results) / wall if wall > 0 else 0.0,
+        mean_s_per_frame=stages.get("total_s", 0.0) / m,
+        stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
+        interrupted=interrupted, temporaries_removed=removed, complete=len(complete))
+    write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
+    return summary

@@ -1,0 +1,41 @@
+"""The task every executor runs: one frame rendered and written by a worker process."""
+from __future__ import annotations
+
+import os
+import time
+import traceback
+from typing import Any, Dict
+
+from .. import outputs
+from .._core import load_image_plugin
+from ..frame import FrameRenderer
+from ..scenario import Scenario
+
+__all__ = ["render_task"]
+
+_WORKER: Dict[str, Any] = {}
+
+
+def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) -> Dict[str, Any]:
+    """Renders and writes one frame in the calling process, reusing this process's
+    FrameRenderer for the same scenario. Workers receive the validated scenario itself
+    (pickled), never a path they would read again. Returns {frame, ok, error, timings}."""
+    try:
+        key = (scenario.sha256, scenario.base_dir, threads)
+        fr = _WORKER.get("renderer")
+        if fr is None or _WORKER.get("key") != key:
+            load_image_plugin()
+            fr = FrameRenderer(scenario, threads)
+            _WORKER.update(renderer=fr, key=key, frames=0)
+        t0 = time.perf_counter()
+        arrays, meta, timings = fr.render(frame)
+        t1 = time.perf_counter()
+        outputs.write_frame(out_dir, frame, arrays, meta, fr.sc.spec["outputs"])
+        timings["write_s"] = time.perf_counter() - t1
+        timings["total_s"] = time.perf_counter() - t0
+        _WORKER["frames"] += 1
+        dropped = [o["dropped"] for o in meta["objects"] if o.get("dropped")]
+        return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid()}
+    except Exception as e:  # reported per frame; the run goes on
+        return {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",
+                "traceback": traceback.format_exc(), "pid": os.getpid()}

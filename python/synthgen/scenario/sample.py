@@ -1,0 +1,128 @@
+"""Sampling one frame of a scenario: a pure function of (scenario, frame index) into typed
+records.
+
+:func:`frame_rng` is the only source of randomness: a generator seeded by (scenario seed,
+frame, stream) through numpy's SeedSequence. :func:`sample_frame` walks the validated tree in
+a fixed order (:func:`synthgen.schema.distributions.sample_tree`), records every draw under
+its key path and returns a :class:`FrameSpec`: the camera, lights (plugin name and given
+parameters), ground and one :class:`ObjectSpec` per object instance.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Mapping, Optional, Tuple
+
+import numpy as np
+
+from .. import randomize
+from ..schema import distributions as D
+from ..schema.plugins import given_params
+from .load import Scenario
+from .schema import SHAPE_KEYS
+
+__all__ = ["frame_rng", "sample_frame", "FrameSpec", "ObjectSpec", "PluginSpec", "CameraSpec", "GroundSpec"]
+
+
+def frame_rng(seed: int, frame: int, stream: int = 0) -> np.random.Generator:
+    """The generator of frame ``frame``: a pure function of (scenario seed, frame index,
+    stream) through numpy's SeedSequence (PCG64)."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([int(seed), int(frame), int(stream)])))
+
+
+@dataclass
+class PluginSpec:
+    """A sampled plugin (a material or a light): its name and the parameters the scenario
+    gives (the native core owns the defaults)."""
+
+    type: str
+    params: Dict[str, Any]
+
+    @classmethod
+    def of(cls, rec: Mapping[str, Any]) -> "PluginSpec":
+        return cls(str(rec["type"]), given_params(rec))
+
+
+@dataclass
+class CameraSpec:
+    """The sampled camera: vertical field of view or intrinsics (fx, fy, cx, cy as given),
+    and the pose record (``type`` orbit or look_at and its values)."""
+
+    fov_y: float
+    intrinsics: Dict[str, float]
+    pose: Mapping[str, Any]
+
+
+@dataclass
+class GroundSpec:
+    enabled: bool
+    size: float
+    material: PluginSpec
+
+
+@dataclass
+class ObjectSpec:
+    """One sampled object instance of a frame."""
+
+    index: int                  #: position in the frame (its instance id is index + 1)
+    kind: int                   #: index of its entry in the scenario's ``objects``
+    class_index: int            #: index in the scenario's class list (class id = class_index + 1)
+    class_name: str
+    name: Optional[str]
+    shape: Tuple[str, Any]      #: ("primitive", "box") | ("mesh", path) | ("asset", id) | (randomizer key, value)
+    size: Tuple[float, float, float]
+    scale: float
+    yaw: float
+    material: Optional[PluginSpec]
+    #: The sampled value of every randomizer key (None: not given), in sample order.
+    randomizers: Dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class FrameSpec:
+    """Every random parameter of one frame, and ``sampled``: {key path: drawn value}."""
+
+    frame: int
+    seed: int
+    camera: CameraSpec
+    lights: List[PluginSpec]
+    ground: GroundSpec
+    objects: List[ObjectSpec]
+    sampled: Dict[str, Any]
+    #: Post-processing steps: name and every parameter (defaults included), in order.
+    post: List[PluginSpec] = field(default_factory=list)
+
+
+def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> ObjectSpec:
+    shape_key = next(k for k in SHAPE_KEYS if o.get(k) is not None)
+    mat = o.get("material")
+    return ObjectSpec(index=index, kind=kind, class_index=class_index, class_name=str(o["class"]), name=o.get("name"),
+                      shape=(shape_key, o[shape_key]), size=tuple(float(x) for x in o["size"]),
+                      scale=float(o["scale"]), yaw=float(o["yaw"]), material=PluginSpec.of(mat) if mat else None,
+                      randomizers={r.key: o.get(r.key) for r in randomize.randomizers()})
+
+
+def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
+    """Every random parameter of frame ``frame`` (see the module docstring)."""
+    rng = frame_rng(sc.seed, frame)
+    spec = sc.spec
+    rec: Dict[str, Any] = {}
+    camera = D.sample_tree(spec["camera"], rng, "camera", rec)
+    lights = D.sample_tree(spec["lights"], rng, "lights", rec)
+    ground = D.sample_tree(spec["ground"], rng, "ground", rec)
+    objects: List[ObjectSpec] = []
+    for k, kind in enumerate(spec["objects"]):
+        n = D.sample_tree(kind["count"], rng, f"objects[{k}].count", rec)
+        body = {key: v for key, v in kind.items() if key != "count"}
+        for i in range(int(n)):
+            o = D.sample_tree(body, rng, f"objects[{k}]#{i}", rec)
+            objects.append(_object(len(objects), k, sc.class_names.index(kind["class"]), o))
+    steps = D.sample_tree(spec["post"], rng, "post", rec)
+    intrinsics = {k: float(camera[k]) for k in ("fx", "fy", "cx", "cy") if camera.get(k) is not None}
+    return FrameSpec(
+        frame=int(frame), seed=sc.seed,
+        camera=CameraSpec(fov_y=float(camera["fov_y"]), intrinsics=intrinsics, pose=camera["pose"]),
+        lights=[PluginSpec.of(li) for li in lights],
+        ground=GroundSpec(enabled=bool(ground["enabled"]), size=float(ground["size"]),
+                          material=PluginSpec.of(ground["material"])),
+        objects=objects, sampled={k: D.plain(v) for k, v in rec.items()},
+        post=[PluginSpec(str(p["type"]), {k: v for k, v in p.items() if k != "type"}) for p in steps])

@@ -1,0 +1,114 @@
+"""The scenario format: the plugins' vocabulary with every leaf allowed to be a distribution,
+plus what only scenarios have (camera poses, objects and their randomizers, placement,
+outputs).
+
+Materials, lights and the camera intrinsics come from the plugins' C++ declarations
+(:func:`synthgen.schema.plugins.plugin_record`, scenario form: no texture or material
+references); object randomizers (``sign``, ``plate``, ``wear``, ``decals``) from
+:mod:`synthgen.randomize`; the output kinds from :mod:`synthgen.outputs`. ``synthgen schema
+--scenario`` prints the whole format.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from .. import outputs, post, randomize
+from ..schema.errors import Loc, ValidationContext, show_value
+from ..schema.fields import (EMPTY, REQUIRED, Bool, Choice, Field, FilePath, Integer, ListOf, Number, Record, String,
+                             Vector)
+from ..schema.plugins import plugin_record, settings_record
+from ..schema.random import R, randomized
+
+__all__ = ["SCENARIO_SCHEMA", "MATERIAL", "LIGHT", "CAMERA", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS",
+           "SHAPE_KEYS", "POST_STEP"]
+
+#: A material: any material plugin but those made of other materials (``mix``).
+MATERIAL = randomized(plugin_record("material", scenario=True, doc="a material (synthgen plugin name and "
+                                                                   "parameters)"))
+
+LIGHT = randomized(plugin_record("light", scenario=True, doc="a light"))
+# An environment map may name an asset of the manifest instead of a file.
+LIGHT.variants["envmap"] = LIGHT.variants["envmap"].extend(
+    {"asset": R(String(None, doc="asset id (kind hdr) instead of file"))}, one_of=[("file", "asset")])
+
+ORBIT = {"target": R(Vector(3, (0.0, 0.0, 0.0), doc="point looked at")),
+         "distance": R(Number(6.0, min=0.0, min_open=True, doc="metres from the target")),
+         "elevation": R(Number(20.0, min=-89.0, max=89.0, doc="degrees above the ground")),
+         "azimuth": R(Number(0.0, min=-360.0, max=720.0, doc="degrees about +y")),
+         "jitter": R(Number(0.0, min=0.0, doc="uniform target jitter in metres (a cube of this half-size)"))}
+LOOK_AT = {"eye": R(Vector(3, REQUIRED)), "target": R(Vector(3, (0.0, 0.0, 0.0)))}
+
+#: The camera plugin's intrinsics (the image size is ``resolution``) and a pose.
+CAMERA = randomized(settings_record("camera", "pinhole", scenario=True, keys=("fov_y", "fx", "fy", "cx", "cy"),
+                                    default=EMPTY, doc="camera")).extend(
+    {"pose": Record({"type": Choice(["orbit", "look_at"], "orbit")}, tag="type",
+                    variants={"orbit": ORBIT, "look_at": LOOK_AT}, default=EMPTY)})
+
+#: Keys of ``objects[]`` that say what the object is (exactly one is given).
+SHAPE_KEYS = ("primitive", "mesh", "asset") + tuple(r.key for r in randomize.randomizers() if r.shape)
+
+OBJECT = Record(
+    {"class": String(REQUIRED, doc="class name (COCO category, YOLO class, KITTI type)"),
+     "name": String(None, doc="label for messages and metadata"),
+     "count": R(Integer(1, min=0, max=1000, doc="instances per frame")),
+     "primitive": R(Choice(["box", "sphere"], None, doc="built-in shape")),
+     "mesh": FilePath(None, doc="mesh file (OBJ, PLY, glTF, GLB)"),
+     "asset": R(String(None, doc="asset id of assets_manifest (kind mesh; `synthgen assets list`)")),
+     "size": R(Vector(3, (1.0, 1.0, 1.0), min=0.0, min_open=True, broadcast=True,
+                      doc="box size or sphere diameter, metres")),
+     "scale": R(Number(1.0, min=0.0, min_open=True, doc="uniform scale of the shape")),
+     "yaw": R(Number(0.0, min=-360.0, max=720.0, doc="rotation about +y, degrees")),
+     "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None),
+     **{r.key: r.schema for r in randomize.randomizers()}},
+    one_of=[SHAPE_KEYS], doc="an object kind placed on the ground")
+
+PLACEMENT = Record(
+    {"region": Vector(4, (-3.0, -3.0, 3.0, 3.0), doc="[x_min, z_min, x_max, z_max] on the ground, metres"),
+     "non_overlapping": Bool(True, doc="footprint circles may not overlap"),
+     "margin": Number(0.05, min=0.0, doc="extra clearance between footprints, metres"),
+     "min_visible_fraction": Number(0.0, min=0.0, max=1.0, doc="visible / amodal pixels of every object"),
+     "max_visible_fraction": Number(1.0, min=0.0, max=1.0,
+                                    doc="at most this visible (e.g. < 1 to ask for occluded or truncated objects)"),
+     "min_pixels": Integer(1, min=0, doc="visible pixels of every object"),
+     "max_retries": Integer(20, min=0, max=10000, doc="layouts tried before objects are dropped")},
+    default=EMPTY, doc="placement on the ground plane (y = 0)")
+
+#: The render settings a scenario sets (the seed of each frame derives from the scenario's).
+RENDER_KEYS = ("spp", "max_depth", "rr_depth", "threads")
+RENDER = settings_record("render", "path_tracer", keys=RENDER_KEYS, default=EMPTY,
+                         doc="path tracing settings (threads: per worker; 0 = all cores / workers)")
+
+
+#: A post-processing step: ``{type: NAME, ...its parameters}`` (:mod:`synthgen.post`).
+POST_STEP = Record({"type": Choice([s.name for s in post.steps()], doc="post-processing step")}, tag="type",
+                   variants={s.name: randomized(s.schema) for s in post.steps()}, doc="a post-processing step")
+
+
+class _Resolution(Field):
+    type_name = "[width, height] in pixels (each 1..16384)"
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        if not isinstance(value, (list, tuple)) or len(value) != 2:
+            ctx.error(loc, f"expected {self.type_name}, got {show_value(value)}")
+        el = Integer(min=1, max=16384)
+        return tuple(el.validate(v, loc.index(i, value), ctx) for i, v in enumerate(value))
+
+
+SCENARIO_SCHEMA = Record(
+    {"version": Integer(1, min=1, max=1, doc="format version"),
+     "description": String("", doc="free text"),
+     "seed": Integer(0, min=0, max=(1 << 63) - 1, doc="scenario seed"),
+     "count": Integer(10, min=1, max=10 ** 9, doc="number of frames"),
+     "resolution": _Resolution((640, 480), doc="image size"),
+     "camera": CAMERA,
+     "lights": R(ListOf(LIGHT, REQUIRED, min_items=1), doc="lights, or a choice of light set-ups",
+                 default=[{"type": "sky", "strength": 0.02}]),
+     "ground": Record({"size": Number(40.0, min=0.0, min_open=True), "enabled": Bool(True),
+                       "material": R(MATERIAL, default={"type": "diffuse", "albedo": [0.3, 0.3, 0.3]})},
+                      default=EMPTY, doc="ground plane y = 0 (class 0, unlabelled)"),
+     "objects": ListOf(OBJECT, REQUIRED, min_items=1, doc="object kinds"),
+     "placement": PLACEMENT,
+     "render": RENDER,
+     "outputs": ListOf(Choice(outputs.kind_names()), outputs.default_outputs(), doc="what to write"),
+     "post": ListOf(POST_STEP, [], doc="image-space steps applied to each frame's image, in order")},
+    doc="a scenario")

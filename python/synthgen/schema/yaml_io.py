@@ -1,0 +1,126 @@
+"""Safe YAML loading that remembers where every key and value is.
+
+:func:`read_yaml` and :func:`parse_yaml` return :class:`MarkedDict` / :class:`MarkedList`
+trees (dicts and lists that know the 1-based line and column of themselves, their keys and
+their values), so validation errors can point into the file. Only safe YAML is accepted;
+duplicate keys are errors; ``1e3`` reads as a number (YAML 1.2), not as a string.
+"""
+from __future__ import annotations
+
+import os
+import re
+from typing import Any, Dict, List, Optional, Tuple
+
+import yaml
+
+from .errors import SceneFileError, _hashable
+
+__all__ = ["MarkedDict", "MarkedList", "read_yaml", "parse_yaml"]
+
+class MarkedDict(dict):
+    """dict from YAML that remembers 1-based (line, column) of itself, its keys and values."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.mark: Optional[Tuple[int, int]] = None
+        self.key_marks: Dict[Any, Tuple[int, int]] = {}
+        self.value_marks: Dict[Any, Tuple[int, int]] = {}
+
+
+class MarkedList(list):
+    """list from YAML that remembers 1-based (line, column) of itself and its items."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.mark: Optional[Tuple[int, int]] = None
+        self.item_marks: List[Tuple[int, int]] = []
+
+
+def _mark(m: yaml.Mark) -> Tuple[int, int]:
+    return (m.line + 1, m.column + 1)
+
+
+class _MarkedLoader(yaml.SafeLoader):
+    """Safe YAML loader producing MarkedDict / MarkedList, rejecting duplicate keys."""
+
+    def construct_marked_mapping(self, node: yaml.Node) -> MarkedDict:
+        if not isinstance(node, yaml.MappingNode):
+            raise yaml.constructor.ConstructorError(
+                None, None, f"expected a mapping node, but found {node.id}", node.start_mark)
+        seen: Dict[Any, yaml.Node] = {}
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge" or not isinstance(key_node, yaml.ScalarNode):
+                continue
+            key = self.construct_object(key_node)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    "while constructing a mapping", node.start_mark,
+                    f"found duplicate key {key!r} (first defined on line {seen[key].start_mark.line + 1})",
+                    key_node.start_mark)
+            seen[key] = key_node
+        self.flatten_mapping(node)
+        d = MarkedDict()
+        d.mark = _mark(node.start_mark)
+        for key_node, value_node in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if not _hashable(key):
+                raise yaml.constructor.ConstructorError(
+                    "while constructing a mapping", node.start_mark, "found an unhashable key", key_node.start_mark)
+            d[key] = self.construct_object(value_node, deep=True)
+            d.key_marks[key] = _mark(key_node.start_mark)
+            d.value_marks[key] = _mark(value_node.start_mark)
+        return d
+
+    def construct_marked_sequence(self, node: yaml.Node) -> MarkedList:
+        if not isinstance(node, yaml.SequenceNode):
+            raise yaml.constructor.ConstructorError(
+                None, None, f"expected a sequence node, but found {node.id}", node.start_mark)
+        out = MarkedList(self.construct_object(child, deep=True) for child in node.value)
+        out.mark = _mark(node.start_mark)
+        out.item_marks = [_mark(child.start_mark) for child in node.value]
+        return out
+
+
+_MarkedLoader.add_constructor("tag:yaml.org,2002:map", _MarkedLoader.construct_marked_mapping)
+_MarkedLoader.add_constructor("tag:yaml.org,2002:seq", _MarkedLoader.construct_marked_sequence)
+# YAML 1.1 (PyYAML) reads 1e3 and 1.0e3 as strings; accept them as floats like YAML 1.2.
+_MarkedLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."),
+)
+
+
+def read_yaml(path: str | os.PathLike, source: Optional[str] = None) -> Any:
+    """Parses a YAML file safely into MarkedDict / MarkedList / scalars.
+
+    Syntax errors, unknown tags and duplicate keys raise :class:`SceneFileError` with the
+    line and column; ``source`` (default: ``path``) names the file in messages.
+    """
+    path = os.fspath(path)
+    source = path if source is None else source
+    try:
+        with open(path, "r", encoding="utf-8") as f:
+            text = f.read()
+    except (OSError, UnicodeDecodeError) as e:
+        reason = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
+        raise SceneFileError(source, None, None, "", f"cannot read scene file: {reason}") from e
+    return parse_yaml(text, source)
+
+
+def parse_yaml(text: str, source: str = "<string>") -> Any:
+    """Parses YAML text like :func:`read_yaml`."""
+    loader = _MarkedLoader(text)
+    try:
+        return loader.get_single_data()
+    except yaml.MarkedYAMLError as e:
+        mark = e.problem_mark or e.context_mark
+        reason = " ".join(str(x) for x in (e.context, e.problem) if x)
+        if e.note:
+            reason += f" ({e.note})"
+        line, col = _mark(mark) if mark is not None else (None, None)
+        raise SceneFileError(source, line, col, "", f"invalid YAML: {reason}") from None
+    except yaml.YAMLError as e:
+        raise SceneFileError(source, None, None, "", f"invalid YAML: {e}") from None
+    finally:
+        loader.dispose()
