@@ -280,6 +280,14 @@ class TextureName(str):
     loc: Loc
 
 
+def _texture_name(value: Mapping, loc: Loc, ctx: ValidationContext) -> TextureName:
+    """The name of a texture reference ``{texture: NAME}`` (validated), with its position."""
+    rec = TEXTURE_REF.validate(value, loc, ctx)
+    name = TextureName(rec["texture"])
+    name.loc = rec.locs["texture"]
+    return name
+
+
 class ColorOrTexture(Field):
     """A colour (number or list of 3, range-checked) or a texture reference
     ``{texture: NAME}``."""
@@ -294,10 +302,7 @@ class ColorOrTexture(Field):
 
     def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
         if isinstance(value, Mapping) and "texture" in value:
-            rec = TEXTURE_REF.validate(value, loc, ctx)
-            name = TextureName(rec["texture"])
-            name.loc = rec.locs["texture"]
-            return name
+            return _texture_name(value, loc, ctx)
         try:
             return self.color.validate(value, loc, ctx)
         except SceneFileError as e:
@@ -341,10 +346,7 @@ class ScalarOrTexture(Field):
 
     def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
         if isinstance(value, Mapping) and "texture" in value:
-            rec = TEXTURE_REF.validate(value, loc, ctx)
-            name = TextureName(rec["texture"])
-            name.loc = rec.locs["texture"]
-            return name
+            return _texture_name(value, loc, ctx)
         return self.number.validate(value, loc, ctx)
 
 
@@ -360,10 +362,7 @@ class TextureRefField(Field):
     def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
         if not isinstance(value, Mapping):
             ctx.error(loc, f"expected {{texture: NAME}}, got {value!r}")
-        rec = TEXTURE_REF.validate(value, loc, ctx)
-        name = TextureName(rec["texture"])
-        name.loc = rec.locs["texture"]
-        return name
+        return _texture_name(value, loc, ctx)
 
 
 class Validated(dict):

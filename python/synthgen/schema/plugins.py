@@ -20,7 +20,7 @@ from __future__ import annotations
 import functools
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
-from .. import _core
+from .._core import plugin_info as _core_plugin_info, plugin_names as _core_plugin_names
 from .fields import (REQUIRED, Bool, Choice, ColorOrTexture, Field, FilePath, Integer, Matrix4, MaterialRef, Number,
                      NumberList, Record, ScalarOrTexture, String, TextureRefField, Vector)
 
@@ -33,7 +33,7 @@ REFERENCE_TYPES = ("texture", "material")
 
 @functools.lru_cache(maxsize=None)
 def _info(kind: str, name: str) -> Dict[str, Any]:
-    return _core.plugin_info(kind, name)
+    return _core_plugin_info(kind, name)
 
 
 def plugin_info(kind: str, name: str) -> Dict[str, Any]:
@@ -43,7 +43,7 @@ def plugin_info(kind: str, name: str) -> Dict[str, Any]:
 
 def plugin_names(kind: str) -> List[str]:
     """Names of the plugins of a kind, sorted."""
-    return list(_core.plugin_names(kind))
+    return list(_core_plugin_names(kind))
 
 
 def _default(p: Mapping[str, Any]) -> Any:
