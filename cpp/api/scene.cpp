@@ -234,6 +234,23 @@ void Scene::set_instance_material(uint32_t id, int64_t material_id) {
   m_structure_dirty = true;
 }
 
+void Scene::set_instance_material_map(uint32_t id, const std::vector<std::pair<int32_t, int64_t>>& map) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  for (const auto& [from, to] : map) {
+    if (from < -1)
+      throw Error("set_instance_material_map: mesh material id " + std::to_string(from) + " (use -1 for triangles "
+                  "without a material)");
+    if (to < 0) throw Error("set_instance_material_map: a triangle material maps to a material id >= 0");
+    check_material_id(to, "set_instance_material_map");
+  }
+  e.material_map = map;
+  m_structure_dirty = true;
+}
+
+const std::vector<std::pair<int32_t, int64_t>>& Scene::instance_material_map(uint32_t id) const {
+  return get_slot(m_instances, id, "instance").material_map;
+}
+
 void Scene::remove_instance(uint32_t id) {
   get_slot(m_instances, id, "instance");
   m_instances[id].reset();
@@ -312,9 +329,12 @@ void Scene::remove_texture(uint32_t id) {
 
 void Scene::remove_material(uint32_t id) {
   get_slot(m_materials, id, "material");
-  for (size_t i = 0; i < m_instances.size(); ++i)
-    if (m_instances[i] && m_instances[i]->material_id == int64_t(id))
-      throw Error("material " + std::to_string(id) + " is still used by instance " + std::to_string(i));
+  for (size_t i = 0; i < m_instances.size(); ++i) {
+    if (!m_instances[i]) continue;
+    bool used = m_instances[i]->material_id == int64_t(id);
+    for (const auto& kv : m_instances[i]->material_map) used = used || kv.second == int64_t(id);
+    if (used) throw Error("material " + std::to_string(id) + " is still used by instance " + std::to_string(i));
+  }
   for (size_t i = 0; i < m_materials.size(); ++i)
     if (m_materials[i] && i != id)
       for (uint32_t d : m_materials[i]->depends_on)
@@ -398,9 +418,12 @@ std::vector<char> Scene::meshes_needing_alpha_test() const {
   for (const auto& e : m_instances) {
     if (!e || needs[e->mesh_id]) continue;
     if (e->material_id >= 0) {
-      needs[e->mesh_id] = m_materials[size_t(e->material_id)]->object->has_alpha();
+      needs[e->mesh_id] = needs[e->mesh_id] || m_materials[size_t(e->material_id)]->object->has_alpha();
       continue;
     }
+    // Mapped materials of this instance (the unmapped ones are the mesh's, checked below).
+    for (const auto& kv : e->material_map)
+      if (m_materials[size_t(kv.second)] && m_materials[size_t(kv.second)]->object->has_alpha()) needs[e->mesh_id] = 1;
     // Per-triangle materials (missing ones fall back to the default material: opaque),
     // scanned once per mesh however many instances share it.
     if (triangles_checked[e->mesh_id]) continue;
@@ -419,6 +442,7 @@ void Scene::build_render_scene() {
   RenderScene& rs = m_render_scene;
   rs.accel = m_accel.get();
   rs.instances.assign(m_instances.size(), InstanceRecord{});
+  m_instance_triangle_materials.assign(m_instances.size(), {});
   rs.lights.clear();
   rs.infinite_lights.clear();
   m_area_lights.clear();
@@ -451,6 +475,20 @@ void Scene::build_render_scene() {
     r.override_material = e->material_id >= 0;
     r.material = r.override_material ? m_materials[size_t(e->material_id)]->object.get() : m_default_material.get();
     r.triangle_materials = me.triangle_materials.empty() ? nullptr : &me.triangle_materials;
+    if (!r.override_material && !e->material_map.empty()) {
+      // This instance's own per-triangle materials: the mesh's, remapped.
+      auto& tm = m_instance_triangle_materials[i];
+      const TriangleMesh& mesh = *me.mesh;
+      tm.assign(mesh.triangle_count(), nullptr);
+      for (size_t t = 0; t < tm.size(); ++t) {
+        int32_t mid = mesh.material_ids.empty() ? -1 : mesh.material_ids[t];
+        const Material* m = mid >= 0 ? me.triangle_materials[t] : nullptr;
+        for (const auto& [from, to] : e->material_map)
+          if (from == mid) m = m_materials[size_t(to)]->object.get();
+        tm[t] = m;
+      }
+      r.triangle_materials = &tm;
+    }
     r.object_lo = me.bounds.lo;
     r.object_hi = me.bounds.hi;
     {

@@ -87,6 +87,13 @@ class Scene {
   void set_instance_transform(uint32_t id, const Transform& world_from_object);
   void set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instance_id);
   void set_instance_material(uint32_t id, int64_t material_id);
+  /// Replaces, for this instance only, the materials of its mesh's triangles: a triangle whose
+  /// mesh material id is a key of `map` uses the mapped material instead (key -1: triangles
+  /// without a material). HydraAPI's per-instance remap lists: wear or decals can wrap each
+  /// material of a multi-material model without copying the mesh. An instance material
+  /// override (set_instance_material >= 0) takes precedence. An empty map removes it.
+  void set_instance_material_map(uint32_t id, const std::vector<std::pair<int32_t, int64_t>>& map);
+  const std::vector<std::pair<int32_t, int64_t>>& instance_material_map(uint32_t id) const;
   /// Points an instance at another mesh (no BVH build: the mesh's BVH exists; only the top
   /// level is rebuilt). Lets a caller keep a fixed pool of instance ids across frames.
   void set_instance_mesh(uint32_t id, uint32_t mesh_id);
@@ -160,6 +167,7 @@ class Scene {
     Transform world_from_object;
     uint32_t class_id = 0, instance_id = 0;
     int64_t material_id = -1;
+    std::vector<std::pair<int32_t, int64_t>> material_map;  ///< mesh material id -> material id
     bool visible = true;
     bool dirty = true;
   };
@@ -191,6 +199,8 @@ class Scene {
   std::vector<std::optional<InstanceEntry>> m_instances;
   std::vector<std::optional<LightEntry>> m_lights;
   std::vector<uint32_t> m_removed_instances;
+  /// Per instance slot with a material map: its triangles' materials (resolved at commit).
+  std::vector<std::vector<const Material*>> m_instance_triangle_materials;
   std::map<std::string, uint32_t> m_image_cache;  // imports: (resolved path, scale) -> texture id
   ImageCache m_images;  // decoded pixels and mip maps shared by all image textures
   PinholeCamera m_camera;

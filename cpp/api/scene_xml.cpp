@@ -174,6 +174,12 @@ void Scene::save(const std::string& path) const {
     n.append_attribute("material") = static_cast<long long>(e.material_id);
     n.append_attribute("world_from_object") = fmt_floats(e.world_from_object.m.data(), 16).c_str();
     if (!e.visible) n.append_attribute("visible") = false;
+    if (!e.material_map.empty()) {
+      std::string map;
+      for (const auto& [from, to] : e.material_map)
+        map += (map.empty() ? "" : " ") + std::to_string(from) + ":" + std::to_string(to);
+      n.append_attribute("material_map") = map.c_str();
+    }
   }
   for (size_t i = 0; i < m_lights.size(); ++i) {
     if (!m_lights[i]) continue;
@@ -269,6 +275,21 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
                      n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
                      n.attribute("material").as_llong());
       if (!n.attribute("visible").as_bool(true)) s.set_instance_visible(uint32_t(id), false);
+      if (n.attribute("material_map")) {
+        std::vector<std::pair<int32_t, int64_t>> map;
+        std::istringstream is(n.attribute("material_map").as_string());
+        std::string item;
+        while (is >> item) {
+          size_t colon = item.find(':');
+          if (colon == std::string::npos) throw Error("instance " + std::to_string(id) + ": bad material_map entry '" + item + "'");
+          try {
+            map.emplace_back(int32_t(std::stol(item.substr(0, colon))), int64_t(std::stoll(item.substr(colon + 1))));
+          } catch (const std::exception&) {
+            throw Error("instance " + std::to_string(id) + ": bad material_map entry '" + item + "'");
+          }
+        }
+        s.set_instance_material_map(uint32_t(id), map);
+      }
     }
     for (pugi::xml_node n : root.children("light")) {
       pad(s.m_lights, n.attribute("id").as_ullong());

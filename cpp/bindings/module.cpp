@@ -1,4 +1,6 @@
 // pybind11 bindings: synthgen._core. Names mirror the C++ API (snake_case).
+#include <map>
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -473,6 +475,22 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("instance"), py::arg("world_from_object"))
       .def("set_instance_labels", &Scene::set_instance_labels, py::arg("instance"), py::arg("class_id"), py::arg("instance_id"))
       .def("set_instance_material", &Scene::set_instance_material, py::arg("instance"), py::arg("material_id"))
+      .def("set_instance_material_map",
+           [](Scene& s, uint32_t id, const std::map<int32_t, int64_t>& map) {
+             s.set_instance_material_map(id, std::vector<std::pair<int32_t, int64_t>>(map.begin(), map.end()));
+           },
+           py::arg("instance"), py::arg("material_map"),
+           "Replaces, for this instance only, the materials of its mesh's triangles: {mesh material id:\n"
+           "material id} (-1: triangles without a material); e.g. wear wrapping each material of a\n"
+           "multi-material model. An instance material (set_instance_material) takes precedence; {}\n"
+           "removes the map.")
+      .def("instance_material_map",
+           [](const Scene& s, uint32_t id) {
+             std::map<int32_t, int64_t> m;
+             for (const auto& kv : s.instance_material_map(id)) m[kv.first] = kv.second;
+             return m;
+           },
+           py::arg("instance"))
       .def("set_instance_mesh", &Scene::set_instance_mesh, py::arg("instance"), py::arg("mesh_id"),
            "Points an instance at another mesh (no BVH build, only the top level).")
       .def("remove_instance", &Scene::remove_instance, py::arg("instance"))

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from typing import Any, Dict, List, Mapping, Optional, Tuple
+from typing import Any, Dict, List, Mapping, Optional, Set, Tuple
 
 import numpy as np
 
@@ -55,6 +55,8 @@ class FrameRenderer:
         self.ground: Optional[int] = None
         self.ground_material: Optional[int] = None
         self.pole_material: Optional[int] = None
+        self.default_material: Optional[int] = None
+        self.mapped: set = set()          # instances that have a per-instance material map
         g = scenario.spec["ground"]
         if g["enabled"]:
             pl = P.plane(float(g["size"]), float(g["size"]))
@@ -134,6 +136,7 @@ class FrameRenderer:
         for inst in self.pool.beyond(len(spec.objects)):
             self.scene.set_instance_visible(inst, False)
             self.scene.set_instance_material(inst, -1)
+            self._set_material_map(inst, {})
         previous, self.library = self.library, FrameLibrary(self.scene)
         objects = []
         n_decor = 0
@@ -160,29 +163,56 @@ class FrameRenderer:
         shape = self.shapes.get(kind, value)
         local, radius, dims, mount = self._local(o, shape)
         rng = frame_rng(spec.seed, spec.frame, 100 + k)
-        mat = -1
+        # The object's materials: one (a scenario material, grey, or what a sign or plate
+        # makes), or -- a model with materials of its own -- one per material of its mesh,
+        # which randomizers wrap one by one (keys: the mesh's material ids).
+        keys: Optional[Tuple[int, ...]] = None
+        mats: List[int] = []
         if kind not in ("primitive", "mesh", "asset"):
             pass  # a shape randomizer makes the material
         elif o.material is not None:
-            mat = self._slot_material(k, o.material)
+            mats = [self._slot_material(k, o.material)]
         elif not shape.own_materials:
-            mat = self._slot_material(k, PluginSpec("diffuse", {"albedo": [0.5, 0.5, 0.5]}))
+            mats = [self._slot_material(k, PluginSpec("diffuse", {"albedo": [0.5, 0.5, 0.5]}))]
+        else:
+            keys = shape.material_ids
+            mats = [m if m >= 0 else self._default_material() for m in keys]
         ctx = randomize.ObjectContext(self.library, rng, o, shape.lo, shape.hi)
         done = {}
         for r in randomize.randomizers(by="apply_order"):
             value = o.randomizers.get(r.key)
             if value is not None:
-                mat, info = r.apply(ctx, value, mat)
+                mats, info = r.apply(ctx, value, mats)
                 if info is not None:
                     done[r.key] = info
+        mat = mats[0] if keys is None else -1
+        material_map = {} if keys is None else {key: m for key, m in zip(keys, mats) if m != key}
         inst, existed = self.pool.take(k, lambda: self.scene.add_instance(
             shape.mesh_id, np.eye(4), class_id=o.class_index + 1, instance_id=k + 1, material_id=mat))
         if existed:
             self.scene.set_instance_mesh(inst, shape.mesh_id)
             self.scene.set_instance_material(inst, mat)
             self.scene.set_instance_labels(inst, o.class_index + 1, k + 1)
+        self._set_material_map(inst, material_map)
         info = {r.key: done[r.key] for r in randomize.randomizers() if r.key in done}
         return PlacedObject(o, shape, inst, local, radius, dims, mount, info=info)
+
+    def _set_material_map(self, inst: int, material_map: Dict[int, int]) -> None:
+        """Per-instance materials of a model that keeps its own (only instances that have or
+        had a map are touched)."""
+        if material_map or inst in self.mapped:
+            self.scene.set_instance_material_map(inst, material_map)
+        if material_map:
+            self.mapped.add(inst)
+        else:
+            self.mapped.discard(inst)
+
+    def _default_material(self) -> int:
+        """The scene's default grey as a material of its own, for triangles of a model that
+        have none (so wear can wrap them too)."""
+        if self.default_material is None:
+            self.default_material = self.scene.add_material("diffuse", {"albedo": 0.5})
+        return self.default_material
 
     def _local(self, o: ObjectSpec, shape: Shape) -> Tuple[np.ndarray, float, np.ndarray, Optional[float]]:
         """(object_from_shape scale and lift, footprint radius, box size in metres, mount

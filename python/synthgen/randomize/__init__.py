@@ -15,7 +15,10 @@ Protocol (:class:`Randomizer`):
   object's material (a plate or sign first, decals before wear);
 - ``shape``: for randomizers that are the object (one of ``primitive`` / ``mesh`` /
   ``asset`` / ...): :meth:`Randomizer.make_shape` and :meth:`Randomizer.placement`;
-- :meth:`Randomizer.apply` -- returns the object's new material id and its metadata record.
+- :meth:`Randomizer.apply` -- returns the object's new materials and its metadata record.
+  An object has one material, or -- a model with materials of its own -- one per material
+  of its mesh; a randomizer that wraps materials (wear, decals) wraps each, so the model
+  keeps them (the frame gives the instance a per-instance material map).
 
 Adding a randomizer is one module here (found by :func:`discover`, registered with
 :func:`register`) plus its test; the scenario schema, the order of application and the
@@ -68,9 +71,11 @@ class Randomizer:
         object (``shape`` randomizers); the mount height (>= 0) puts a post below it."""
         raise NotImplementedError
 
-    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], material: int) -> Tuple[int, Any]:
-        """Changes the object: returns its new material id (``material`` < 0: the mesh's own
-        materials) and what to record in the metadata under :attr:`key` (None: nothing)."""
+    def apply(self, ctx: ObjectContext, value: Any, materials: List[int]) -> Tuple[List[int], Any]:
+        """Changes the object: ``materials`` are its material ids (one, or one per material of
+        its mesh; empty for a ``shape`` randomizer, which makes the object's material);
+        returns the new ones (same length; a ``shape`` randomizer returns one) and what to
+        record in the metadata under :attr:`key` (None: nothing)."""
         raise NotImplementedError
 
 

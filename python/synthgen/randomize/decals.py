@@ -46,13 +46,11 @@ class Decals(Randomizer):
     sample_order = 40
     apply_order = 30
 
-    def apply(self, ctx: ObjectContext, value: Any, material: int) -> Tuple[int, Any]:
+    def apply(self, ctx: ObjectContext, value: Any, materials: List[int]) -> Tuple[List[int], Any]:
         if not value:
-            return material, None
+            return materials, None
         rng = ctx.rng
-        mat = material
-        if mat < 0:
-            mat = ctx.scene.add_material("diffuse", {"albedo": 0.5})
+        mats = list(materials)
         lo, hi = np.asarray(ctx.shape_lo, np.float64), np.asarray(ctx.shape_hi, np.float64)
         ext = np.maximum(hi - lo, 1e-6)
         centre = 0.5 * (lo + hi)
@@ -78,12 +76,12 @@ class Decals(Randomizer):
             target = [float(centre[0]), cy, float(centre[2])]
             position = [float(centre[0]), cy, float(lo[2]) - dist]
             fov = float(np.degrees(2.0 * np.arctan(0.5 * width / aspect / (dist + 0.5 * ext[2]))))
-            mat = wear.decal(ctx.scene, mat, image, position=position, look_at=target, fov=max(fov, 0.1),
-                             aspect=aspect, occlusion=False, space="object")
+            mats = wear.decal(ctx.scene, mats, image, position=position, look_at=target, fov=max(fov, 0.1),
+                              aspect=aspect, occlusion=False, space="object")
             # The decal's size on the object's front (object units): the image keeps its aspect.
             info["size"] = [round(width, 6), round(width / aspect, 6)]
             done.append(info)
-        return mat, done
+        return mats, done
 
 
 register(Decals())

@@ -3,7 +3,7 @@
 registration text goes into the metadata."""
 from __future__ import annotations
 
-from typing import Any, Mapping, Tuple
+from typing import Any, List, Mapping, Tuple
 
 import numpy as np
 
@@ -40,7 +40,7 @@ class Plate(Randomizer):
         m[1, 3] = mount + 0.5 * h
         return m, 0.5 * w, np.array([w, h + mount, 0.01]), mount
 
-    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], material: int) -> Tuple[int, Any]:
+    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
         reg = plates.random_registration(value["country"], ctx.rng)
         p = plates.render_plate(reg, px_per_mm=1.5)
         linear = {"wrap": "clamp", "colorspace": "linear"}
@@ -48,7 +48,7 @@ class Plate(Randomizer):
         nrm = ctx.scene.add_image_texture(np.asarray(p["normal"], np.float32), linear)
         mat = ctx.scene.add_material("principled", {"base_color": TextureRef(col), "normal_map": TextureRef(nrm),
                                                     "roughness": 0.35, "metallic": 0.0})
-        return mat, {"country": reg["country"], "text": reg["text"], "text_latin": p["text_latin"]}
+        return [mat], {"country": reg["country"], "text": reg["text"], "text_latin": p["text_latin"]}
 
 
 register(Plate())

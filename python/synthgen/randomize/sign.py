@@ -3,7 +3,7 @@ on a square panel, on a pole (``mount_height``). The sign's family, text and cla
 into the metadata."""
 from __future__ import annotations
 
-from typing import Any, Mapping, Tuple
+from typing import Any, List, Mapping, Tuple
 
 import numpy as np
 
@@ -44,12 +44,12 @@ class Sign(Randomizer):
         m[1, 3] = mount
         return m, 0.5 * s, np.array([s, s + mount, 0.02]), mount
 
-    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], material: int) -> Tuple[int, Any]:
+    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
         s = signs.render_sign(value["family"], value.get("text"), 256)
         tex = ctx.scene.add_image_texture(np.asarray(s["rgba"], np.float32), {"wrap": "clamp", "colorspace": "linear"})
         mat = ctx.scene.add_material("principled", {"base_color": TextureRef(tex), "alpha": TextureRef(tex),
                                                     "alpha_mode": "mask", "roughness": 0.45})
-        return mat, {"family": s["family"], "text": s["text"], "class_name": s["class_name"]}
+        return [mat], {"family": s["family"], "text": s["text"], "class_name": s["class_name"]}
 
 
 register(Sign())

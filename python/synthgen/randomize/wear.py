@@ -3,7 +3,7 @@
 effects applied and their parameters (seeds included) go into the metadata."""
 from __future__ import annotations
 
-from typing import Any, Dict, Mapping, Tuple
+from typing import Any, Dict, List, Mapping, Tuple
 
 from ..schema.fields import REQUIRED, Choice, Field, Integer, ListOf, Number, Record, Vector
 from ..schema.random import R
@@ -55,12 +55,10 @@ class Wear(Randomizer):
     sample_order = 30
     apply_order = 40
 
-    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], material: int) -> Tuple[int, Any]:
+    def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
         rng = ctx.rng
         applied: Dict[str, Any] = {}
-        mat = material
-        if mat < 0:
-            mat = ctx.scene.add_material("diffuse", {"albedo": 0.5})
+        mats = list(materials)
         for effect in EFFECTS:
             spec = value.get(effect)
             if spec is None:
@@ -72,9 +70,9 @@ class Wear(Randomizer):
                 kw["colors"] = sorted((float(c["position"]), tuple(float(x) for x in c["color"])) for c in kw["colors"])
             seed = spec.get("seed")
             kw["seed"] = int(seed) if seed is not None else int(rng.integers(0, 1 << 31))
-            mat = getattr(wear, effect)(ctx.scene, mat, **kw)
+            mats = getattr(wear, effect)(ctx.scene, mats, **kw)
             applied[effect] = kw
-        return mat, applied
+        return mats, applied
 
 
 register(Wear())

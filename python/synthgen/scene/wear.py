@@ -2,7 +2,8 @@
 
 Each function adds textures and materials to a :class:`synthgen.Scene` and returns the id of
 a ``mix`` material that blends a wear material over ``base`` (a material id) with a procedural
-mask -- the seed's equation (4-8), ``m(x) = (1 - mask(x)) m_base(x) + mask(x) m_wear(x)``.
+mask (``base`` may be a list of material ids -- the materials of a multi-material model --:
+the result is then the list of their mixes, sharing one mask and wear layer) -- the seed's equation (4-8), ``m(x) = (1 - mask(x)) m_base(x) + mask(x) m_wear(x)``.
 Masks and wear colours use the procedural textures (``noise``, ``cellular``, ``gradient``,
 ``blend``; see docs/wear.md): 3D mappings, so models without uvs carry
 wear too, band-limited by the ray footprint, deterministic for a given ``seed``.
@@ -58,26 +59,37 @@ def _mask(scene: Scene, raw: Dict[str, Any], amount: float, softness: float) -> 
     remapped around its calibrated threshold (soft edge of width `softness` in raw units).
     The remap goes into that blend itself (one texture lookup less per hit than a blend
     over it): the unshaped blend exists only while the threshold is calibrated."""
+    if amount <= 0.0 or amount >= 1.0:
+        # Nothing or everything: a constant mask (a threshold beyond the values would make the
+        # remap's two ends equal in float precision).
+        return scene.add_texture("constant", {"value": 1.0 if amount >= 1.0 else 0.0})
     probe = scene.add_texture("blend", raw)
     t = _threshold(scene, probe, amount)
     scene.remove_texture(probe)
     return scene.add_texture("blend", dict(raw, remap=[t - 0.5 * softness, t + 0.5 * softness], smooth=True))
 
 
-def _mix(scene: Scene, base: int, wear: int, mask: int, stochastic: bool = False) -> int:
-    """The preset's result: ``wear`` over ``base`` weighted by ``mask``. ``stochastic``
+Base = Union[int, Sequence[int]]
+
+
+def _mix(scene: Scene, base: Base, wear: int, mask: int, stochastic: bool = False) -> Any:
+    """The preset's result: ``wear`` over ``base`` weighted by ``mask``; a list of bases (the
+    materials of a multi-material model) gives a list of mixes sharing the one mask and wear
+    layer, so the model keeps its materials under the wear. ``stochastic``
     (rust, dirt: wear layers that are diffuse) shades secondary hits where the mask is
     fractional -- soft edges, and most indirect hits, whose footprints filter the mask to its
     mean -- with one material instead of two. Not for glossy wear layers (scratches, ice,
     decals): a rarely chosen glossy layer reflecting the sun would show as fireflies in
     indirect light."""
+    if not isinstance(base, (int, np.integer)):
+        return [_mix(scene, b, wear, mask, stochastic) for b in base]
     return scene.add_material("mix", {"material_a": int(base), "material_b": int(wear), "weight": TextureRef(mask),
                                       "stochastic": bool(stochastic)})
 
 
-def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale: float = 3.0,
+def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale: float = 3.0,
          bottom_bias: float = 0.6, roughness: float = 0.85, bump: float = 0.002,
-         colors: Sequence = RUST_COLORS) -> int:
+         colors: Sequence = RUST_COLORS) -> Any:
     """Rust over ``base``: an fBm mask in relative-local coordinates (``scale`` features
     across the object), biased towards the bottom of the object by ``bottom_bias`` (0 = none,
     1 = strong), covering ``amount`` of it; the rust has a colour-ramp fBm and a turbulence
@@ -111,9 +123,9 @@ def rust(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.35, scale:
     return _mix(scene, base, wear, mask, stochastic=True)
 
 
-def scratches(scene: Scene, base: int, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
+def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
               amount: float = 1.0, direction: Optional[Sequence[float]] = None, elongation: float = 8.0,
-              metal: str = "aluminium", roughness: float = 0.35, depth: float = 0.0) -> int:
+              metal: str = "aluminium", roughness: float = 0.35, depth: float = 0.0) -> Any:
     """Scratches through ``base`` down to bare metal: thin lines along the edges of a
     cellular pattern (F2 - F1 below ``width``), ``density`` cells per metre (object mapping);
     with ``direction`` ('x', 'y' or 'z') the cells are stretched ``elongation`` times along
@@ -151,8 +163,8 @@ def scratches(scene: Scene, base: int, *, seed: int = 0, density: float = 8.0, w
     return _mix(scene, base, wear, mask)
 
 
-def ice(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.5, scale: float = 4.0,
-        bump: float = 0.003, top_bias: float = 0.5) -> int:
+def ice(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.5, scale: float = 4.0,
+        bump: float = 0.003, top_bias: float = 0.5) -> Any:
     """Ice / frost over ``base``: a white glossy layer (principled, clearcoat 1, roughness
     0.15) with a turbulence bump of ``bump`` metres, where an fBm mask (relative mapping,
     ``scale``, biased towards the top by ``top_bias``) covers ``amount`` of the object."""
@@ -172,9 +184,9 @@ def ice(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.5, scale: f
     return _mix(scene, base, wear, mask)
 
 
-def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: float = 5.0,
+def dirt(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.4, scale: float = 5.0,
          bottom_bias: float = 1.0, ao_radius: float = 0.3, ao_weight: float = 1.0,
-         color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95) -> int:
+         color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95) -> Any:
     """Dirt on ``base``: gravity-biased accumulation (more at the bottom, relative-local
     height, ``bottom_bias``) and ambient-occlusion-driven accumulation (more in creases and
     corners: 1 - AO from 4 rays of ``ao_radius`` metres at the shading point, weighted by
@@ -198,10 +210,10 @@ def dirt(scene: Scene, base: int, *, seed: int = 0, amount: float = 0.4, scale: 
     return _mix(scene, base, wear, mask, stochastic=True)
 
 
-def decal(scene: Scene, base: int, image: Union[str, os.PathLike, np.ndarray], *, position: Sequence[float],
+def decal(scene: Scene, base: Base, image: Union[str, os.PathLike, np.ndarray], *, position: Sequence[float],
           look_at: Sequence[float], up: Sequence[float] = (0.0, 1.0, 0.0), fov: float = 20.0, aspect: float = 1.0,
           occlusion: bool = True, depth_resolution: int = 512, roughness: float = 0.4, space: str = "world",
-          facing: Optional[bool] = None) -> int:
+          facing: Optional[bool] = None) -> Any:
     """An image (sticker, graffiti, stripes, a plate; a file or an array of linear values)
     projected onto ``base`` by a pinhole
     projector at ``position`` looking at ``look_at`` (vertical ``fov`` degrees, width/height
