@@ -1,6 +1,7 @@
 """``synthgen verify``: a dataset's labels agree with its masks.
 
-For every complete frame, each COCO annotation decodes to exactly the pixels of its instance
+Every frame with metadata must be complete (all its files present and decodable); for each,
+each COCO annotation decodes to exactly the pixels of its instance
 in ``instance/*.png``, bbox and area are the mask's, the semantic mask holds its category
 there, every visible instance is labelled once, and the YOLO and KITTI files hold the same
 boxes and classes.
@@ -15,7 +16,7 @@ import numpy as np
 from .._core import SynthgenError
 from .coco import mask_bbox, rle_decode
 from .kitti import parse_kitti
-from .meta import completed_frames
+from .meta import frame_status, read_meta
 from .registry import frame_name
 from .yolo import parse_yolo
 
@@ -26,9 +27,18 @@ def _read_u16(path: str) -> np.ndarray:
     import OpenImageIO as oiio
 
     buf = oiio.ImageBuf(path)
-    if buf.has_error:
-        raise SynthgenError(f"{path}: {buf.geterror()}")
-    return np.asarray(buf.get_pixels(oiio.UINT16))[..., 0].astype(np.int64)
+    px = None if buf.has_error else buf.get_pixels(oiio.UINT16)
+    if px is None or buf.has_error or np.asarray(px).ndim != 3:
+        raise SynthgenError(f"{path}: unreadable image: {buf.geterror() or 'no pixels'}")
+    return np.asarray(px)[..., 0].astype(np.int64)
+
+
+def _readable(path: str) -> None:
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(path)
+    if buf.has_error or not buf.read():
+        raise SynthgenError(f"{path}: unreadable image: {buf.geterror() or 'no pixels'}")
 
 
 def verify_dataset(out_dir: str) -> Dict[str, Any]:
@@ -42,14 +52,31 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
     def fail(msg: str) -> None:
         raise SynthgenError(f"{out_dir}: {msg}")
 
-    with open(os.path.join(out_dir, "annotations", "coco.json"), encoding="utf-8") as f:
-        coco = json.load(f)
-    names = [c["name"] for c in coco["categories"]]
-    by_image: Dict[int, List[Dict[str, Any]]] = {}
-    for a in coco["annotations"]:
-        by_image.setdefault(a["image_id"], []).append(a)
-    frames = completed_frames(out_dir)
-    if sorted(im["id"] for im in coco["images"]) != frames:
+    frames, broken = frame_status(out_dir)
+    for k, reason in broken.items():
+        fail(f"frame {k} is incomplete: {reason}")
+    if not frames:
+        fail("no complete frame (no meta/NNNNNN.json)")
+    coco_path = os.path.join(out_dir, "annotations", "coco.json")
+    try:
+        with open(coco_path, encoding="utf-8") as f:
+            coco = json.load(f)
+        names = [c["name"] for c in coco["categories"]]
+        by_image: Dict[int, List[Dict[str, Any]]] = {}
+        for a in coco["annotations"]:
+            by_image.setdefault(a["image_id"], []).append(a)
+        image_ids = sorted(im["id"] for im in coco["images"])
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        fail(f"{coco_path}: missing or unreadable ({type(e).__name__}: {e})")
+    for k in frames:
+        meta = read_meta(os.path.join(out_dir, "meta", frame_name(k) + ".json"))
+        if "instance" not in meta["files"]:
+            fail(f"frame {k}: no instance mask (the `instance` output is needed to verify labels)")
+        for kind, rel in meta["files"].items():  # every file of the frame decodes
+            path = os.path.join(out_dir, rel)
+            if rel.endswith((".png", ".exr")):
+                _read_u16(path) if kind in ("instance", "semantic", "depth16") else _readable(path)
+    if image_ids != frames:
         fail("annotations/coco.json does not list exactly the complete frames")
     n_ann = 0
     for k in frames:

@@ -17,7 +17,9 @@ from typing import Any, Dict, List, Optional, Sequence
 from .. import outputs
 from .._core import SynthgenError
 from ..outputs.files import write_json
-from ..outputs.meta import completed_frames
+from ..outputs.meta import completed_frames, frame_status
+from ..outputs.registry import frame_name
+from .manifest import build_manifest, check_manifest, write_manifest
 from ..scenario import load_scenario
 from .executors import DaskExecutor, LocalExecutor
 from .task import render_task
@@ -49,6 +51,8 @@ class RunSummary(dict):
             st = ", ".join(f"{k[:-2]} {v:.3f}" for k, v in self["stage_s"].items())
             lines.append(f"mean seconds/frame: {self['mean_s_per_frame']:.3f} (per stage: {st}); "
                          f"wall {self['wall_s']:.1f} s, {self['frames_per_s']:.3f} frames/s")
+        for f in self.get("incomplete", [])[:20]:
+            lines.append(f"  frame {f['frame']} was incomplete and is rendered again: {f['reason']}")
         if self.get("interrupted"):
             lines.append("interrupted: completed frames are kept; run again with --resume")
         return "\n".join(lines)
@@ -62,11 +66,17 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     n = int(count) if count is not None else sc.count
     frames = list(only) if only is not None else list(range(n))
     os.makedirs(out_dir, exist_ok=True)
-    done = set(completed_frames(out_dir))
-    if done and not resume and only is None:
-        raise SynthgenError(f"{out_dir} already holds {len(done)} frame(s); use --resume to complete it "
-                            f"or choose another output directory")
+    complete, broken = frame_status(out_dir)
+    done = set(complete)
+    if (done or broken) and not resume and only is None:
+        raise SynthgenError(f"{out_dir} already holds {len(done) + len(broken)} frame(s); use --resume to complete "
+                            f"it or choose another output directory")
+    manifest = build_manifest(sc)
+    check_manifest(out_dir, manifest, sorted(done | set(broken)))
+    write_manifest(out_dir, manifest)
     removed = remove_temporaries(out_dir)
+    for k in broken:  # incomplete: rendered again below (they are not in `done`)
+        os.unlink(os.path.join(out_dir, "meta", frame_name(k) + ".json"))
     todo = [k for k in frames if not (resume and k in done)] if only is None else frames
     if threads is None:
         threads = max(1, (os.cpu_count() or 1) // max(1, workers)) if (workers > 1 or scheduler) else 0
@@ -115,6 +125,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         wall_s=wall, frames_per_s=len(results) / wall if wall > 0 else 0.0,
         mean_s_per_frame=stages.get("total_s", 0.0) / m,
         stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
-        interrupted=interrupted, temporaries_removed=removed, complete=len(complete))
+        interrupted=interrupted, temporaries_removed=removed, complete=len(complete),
+        incomplete=[{"frame": k, "reason": r} for k, r in broken.items()])
     write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
     return summary

@@ -30,7 +30,7 @@ import numpy as np
 from .errors import Loc, SceneFileError, ValidationContext, as_seq, fmt_num, is_bool, show_value, suggest
 
 __all__ = ["REQUIRED", "EMPTY", "Field", "Number", "Integer", "Bool", "String", "Choice", "FilePath", "Vector",
-           "NumberList", "Matrix4", "TextureName", "ColorOrTexture", "MaterialName", "MaterialRef", "ScalarOrTexture",
+           "NumberList", "InputPath", "Matrix4", "TextureName", "ColorOrTexture", "MaterialName", "MaterialRef", "ScalarOrTexture",
            "TextureRefField", "Validated", "Record", "MapOf", "ListOf", "map_values", "TEXTURE_REF"]
 
 
@@ -173,9 +173,14 @@ class Choice(String):
         return value
 
 
+class InputPath(str):
+    """An absolute path validated by :class:`FilePath`: a file the scene or scenario reads
+    (so a run can record what its output depends on)."""
+
+
 class FilePath(String):
     """Path of an existing file; relative paths are resolved against the scene file's
-    directory. Validates to an absolute path."""
+    directory. Validates to an absolute path (an :class:`InputPath`)."""
 
     type_name = "file path"
 
@@ -186,7 +191,7 @@ class FilePath(String):
             how = "" if os.path.isabs(value) else f" (relative paths are resolved against {ctx.base_dir})"
             what = "is a directory" if os.path.isdir(path) else "not found"
             ctx.error(loc, f"file {what}: {path}{how}")
-        return path
+        return InputPath(path)
 
 
 class Vector(Field):
