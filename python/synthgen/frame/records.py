@@ -29,6 +29,8 @@ class PlacedObject:
     radius: float                  #: footprint radius on the ground
     dims: np.ndarray               #: box size in metres (x, y, z)
     mount_height: Optional[float] = None   #: sign / plate: height of its lower edge (a post below)
+    #: The model's forward direction in its own coordinates (KITTI's heading follows it).
+    forward: Tuple[float, float, float] = (1.0, 0.0, 0.0)
     decor: Optional[int] = None    #: index of its post in the decor pool
     world: Optional[np.ndarray] = None     #: world_from_object once placed
     #: What each randomizer did (recorded in the metadata under its key), in sample order.
@@ -59,13 +61,40 @@ def frame_camera(cam: CameraSpec, resolution: Tuple[int, int], rng: np.random.Ge
     return PinholeCamera.from_fov(cam.fov_y, w, h, wfc)
 
 
+def level_frame(camera: PinholeCamera) -> Dict[str, Any]:
+    """The frame of KITTI's 3D labels: the camera's position and heading with its pitch and
+    roll removed (x right, y down along the world's vertical, z forward, level), so boxes
+    that stand on the ground turn about its y axis only, as KITTI assumes. ``level_from_world``
+    (3 x 4) maps world points into it, ``P2`` (3 x 4) projects its points into the image (the
+    real, tilted camera): KITTI's calibration with R0_rect = I and the world as its velodyne
+    frame."""
+    wfc = np.asarray(camera.world_from_camera, np.float64)
+    R_wc, c = wfc[:3, :3], wfc[:3, 3]
+    fwd = R_wc @ np.array([0.0, 0.0, 1.0])
+    flat = np.array([fwd[0], 0.0, fwd[2]])
+    if np.linalg.norm(flat) < 1e-6:  # looking straight down or up: the image's up is forward
+        up_img = R_wc @ np.array([0.0, -1.0, 0.0])
+        flat = np.array([up_img[0], 0.0, up_img[2]]) * (1.0 if fwd[1] < 0 else -1.0)
+    z = flat / np.linalg.norm(flat)
+    y = np.array([0.0, -1.0, 0.0])
+    x = np.cross(y, z)
+    L = np.stack([x, y, z])                       # level_from_world rotation
+    level_from_world = np.concatenate([L, (-L @ c)[:, None]], axis=1)
+    cam_from_level = R_wc.T @ L.T
+    K = np.asarray(camera.K, np.float64)
+    P2 = K @ np.concatenate([cam_from_level, np.zeros((3, 1))], axis=1)
+    return {"level_from_world": level_from_world.tolist(), "P2": P2.tolist()}
+
+
 def object_records(objects: Sequence[PlacedObject], keep: Sequence[bool], dropped: Mapping[int, str],
                    amodal: Mapping[int, Tuple[int, int]], ids: np.ndarray, camera: PinholeCamera,
                    class_names: Sequence[str]) -> List[Dict[str, Any]]:
     """The metadata of each object: labels, what its randomizers did, and for kept objects
-    the visible / amodal pixels, occlusion, truncation, box and 3D pose in the camera frame
-    (bottom centre, dimensions h, w, l; heading = the object's +x)."""
-    cfw = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64))
+    the visible / amodal pixels, occlusion, truncation, box and 3D pose in KITTI's level
+    camera frame (:func:`level_frame`)
+    (bottom centre; dimensions h, w, l along the model's up, lateral and forward axes;
+    heading = the direction its forward axis points)."""
+    lfw = np.asarray(level_frame(camera)["level_from_world"], np.float64)  # KITTI's 3D frame
     out = []
     for k, o in enumerate(objects):
         s = o.spec
@@ -86,8 +115,8 @@ def object_records(objects: Sequence[PlacedObject], keep: Sequence[bool], droppe
                     "bbox": mask_bbox(mask)})
         world = o.world
         base = np.array([world[0, 3], 0.0, world[2, 3], 1.0])  # the footprint centre on the ground
-        loc_cam = (cfw @ base)[:3]
-        heading = cfw[:3, :3] @ (world[:3, :3] @ np.array([1.0, 0.0, 0.0]))
+        loc_cam = lfw @ base
+        heading = lfw[:, :3] @ (world[:3, :3] @ np.asarray(o.forward, np.float64))
         ry = math.atan2(-heading[2], heading[0])
         dims = o.dims
         rec.update({"world_from_object": world.tolist(), "dimensions_hwl": [float(dims[1]), float(dims[2]),

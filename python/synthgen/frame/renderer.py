@@ -15,14 +15,14 @@ from typing import Any, Dict, List, Mapping, Optional, Set, Tuple
 
 import numpy as np
 
-from .._core import Scene
+from .._core import Scene, SynthgenError
 from .. import post, randomize
 from ..outputs.render import camera_meta
 from ..scenario import Scenario, frame_rng, sample_frame
 from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
 from ..scene import primitives as P
 from .layout import FrameView, amodal_pixels, search_layout
-from .records import PlacedObject, frame_camera, object_records
+from .records import PlacedObject, frame_camera, level_frame, object_records
 from .resources import FrameLibrary, Pool, Shape, Shapes
 
 __all__ = ["FrameRenderer", "light_plugin"]
@@ -36,6 +36,21 @@ def light_plugin(light: PluginSpec) -> Tuple[str, Dict[str, Any]]:
 
         params["file"] = assets.resolve(params.pop("asset"))
     return light.type, params
+
+
+_AXIS = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
+         "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0)}
+
+
+def orientation(forward: str, up: str) -> Optional[np.ndarray]:
+    """The rotation (a signed permutation) taking a model's ``forward`` axis to +x and its
+    ``up`` axis to +y; None for the identity (+x, +y)."""
+    if (forward, up) == ("+x", "+y"):
+        return None
+    f, u = np.array(_AXIS[forward]), np.array(_AXIS[up])
+    if abs(float(f @ u)) > 0.5:
+        raise SynthgenError(f"a model's forward ({forward}) and up ({up}) must be different axes")
+    return np.stack([f, u, np.cross(f, u)])
 
 
 class FrameRenderer:
@@ -96,7 +111,7 @@ class FrameRenderer:
         meta = {
             "format": "synthgen-dataset-frame", "format_version": 1, "frame": int(frame),
             "scenario_seed": sc.seed, "render_seed": render_seed, "scenario_sha256": sc.sha256,
-            "image_size": list(sc.resolution), "camera": camera_meta(camera),
+            "image_size": list(sc.resolution), "camera": camera_meta(camera), "kitti_frame": level_frame(camera),
             "render": dict(rs), "layout_attempts": layout.attempts,
             "lights": [dict(zip(("type", "params"), light_plugin(li))) for li in spec.lights],
             "objects": object_records(objects, keep, layout.dropped, amodal, arrays["instance_id"], camera,
@@ -195,7 +210,8 @@ class FrameRenderer:
             self.scene.set_instance_labels(inst, o.class_index + 1, k + 1)
         self._set_material_map(inst, material_map)
         info = {r.key: done[r.key] for r in randomize.randomizers() if r.key in done}
-        return PlacedObject(o, shape, inst, local, radius, dims, mount, info=info)
+        forward = _AXIS[o.forward or shape.forward or "+x"] if kind in ("primitive", "mesh", "asset") else _AXIS["+x"]
+        return PlacedObject(o, shape, inst, local, radius, dims, mount, forward=forward, info=info)
 
     def _set_material_map(self, inst: int, material_map: Dict[int, int]) -> None:
         """Per-instance materials of a model that keeps its own (only instances that have or
@@ -220,17 +236,28 @@ class FrameRenderer:
         kind, value = o.shape
         if kind not in ("primitive", "mesh", "asset"):
             return randomize.randomizer(kind).placement(value, o.scale)
+        # The model turned so that its forward axis is +x and its up axis +y (the frame in which
+        # sizes, the footprint and KITTI's dimensions and heading are measured).
+        turn = orientation(o.forward or shape.forward or "+x", o.up or shape.up or "+y")
+        lo, hi = shape.lo, shape.hi
+        if turn is not None:
+            a, b = turn @ lo, turn @ hi
+            lo, hi = np.minimum(a, b), np.maximum(a, b)
         size = np.asarray(o.size, np.float64) * o.scale
         if shape.own_materials:  # meshes keep their proportions: size is a per-axis scale factor
-            dims = (shape.hi - shape.lo) * shape.unit * size  # in metres (manifest `scale`)
+            dims = (hi - lo) * shape.unit * size  # in metres (manifest `scale`)
         else:
             dims = size.copy()
             if value == "sphere":
                 dims = np.full(3, size[0])
-        s = dims / np.maximum(shape.hi - shape.lo, 1e-12)
-        centre = 0.5 * (shape.lo + shape.hi)
+        s = dims / np.maximum(hi - lo, 1e-12)
+        centre = 0.5 * (lo + hi)
         # Scale about the bounds' centre, then lift so the lowest point touches y = 0.
         m = np.eye(4)
         m[:3, :3] = np.diag(s)
         m[:3, 3] = -centre * s + np.array([0.0, 0.5 * dims[1], 0.0])
+        if turn is not None:
+            t4 = np.eye(4)
+            t4[:3, :3] = turn
+            m = m @ t4
         return m, 0.5 * math.hypot(dims[0], dims[2]), dims, None

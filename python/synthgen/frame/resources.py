@@ -26,12 +26,14 @@ class Shape:
     """A mesh in the worker's scene with its object-space bounds."""
 
     def __init__(self, mesh_id: int, lo: np.ndarray, hi: np.ndarray, own_materials: bool, unit: float = 1.0,
-                 material_ids: Tuple[int, ...] = ()):
+                 material_ids: Tuple[int, ...] = (), forward: Optional[str] = None, up: Optional[str] = None):
         self.mesh_id, self.lo, self.hi, self.own_materials = mesh_id, lo, hi, own_materials
         self.unit = unit  #: metres per mesh unit (an asset's manifest `scale`)
         #: The distinct per-triangle material ids of a model with materials of its own
         #: (-1: triangles without one, shaded with the scene's default grey).
         self.material_ids = material_ids
+        #: The model's own forward and up axes ("+z", ...) when its asset declares them.
+        self.forward, self.up = forward, up
 
 
 class Shapes:
@@ -52,18 +54,20 @@ class Shapes:
     def _make(self, kind: str, value: Any) -> Shape:
         scene = self.scene
         if kind in ("mesh", "asset"):
-            unit, path = 1.0, value
+            unit, path, axes = 1.0, value, {}
             if kind == "asset":
                 from ..scene import assets
 
                 path = assets.resolve(value)
-                unit = float(assets.entry(value).get("scale", 1.0))
+                entry = assets.entry(value)
+                unit = float(entry.get("scale", 1.0))
+                axes = {k: entry[k] for k in ("forward", "up") if k in entry}
             r = scene.load_mesh_file(path)
             arrays = scene.mesh_arrays(r["mesh_id"])
             pos = np.asarray(arrays["positions"], np.float64)
             ids = np.asarray(arrays["material_ids"], np.int64)
             distinct = tuple(int(i) for i in np.unique(ids)) if ids.size else (-1,)
-            return Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True, unit, distinct)
+            return Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
         if kind == "primitive":
             m = P.box((1.0, 1.0, 1.0)) if value == "box" else P.uv_sphere(0.5, 48, 24)
             mid = scene.add_mesh(m["positions"], m["indices"], normals=m["normals"], uvs=m["uvs"], name=value)

@@ -1,9 +1,13 @@
-"""Output kind ``kitti``: KITTI object labels, ``kitti/NNNNNN.txt``.
+"""Output kinds ``kitti``: KITTI object labels, ``kitti/NNNNNN.txt``, and ``kitti_calib``:
+their calibration, ``kitti_calib/NNNNNN.txt``.
 
 ``type truncated occluded alpha left top right bottom h w l x y z rotation_y``; the box is in
 pixel-edge coordinates (right = x + w); 3D fields in the camera frame (x right, y down, z
 forward, metres) when known, else KITTI's "unknown" values (-1 for dimensions, -1000 for the
-location, -10 for the angles).
+location, -10 for the angles). The 3D fields are in the *level* camera frame: the camera
+with its pitch and roll removed (y along the world's vertical), because KITTI's boxes turn
+about y only; the calibration's P2 projects that frame into the (tilted) image, so
+``P2 @ corner`` lands on the object.
 """
 from __future__ import annotations
 
@@ -14,7 +18,7 @@ from typing import Any, Dict, List, Optional
 from .files import write_text
 from .registry import Frame, OutputKind, register
 
-__all__ = ["kitti_line", "parse_kitti", "kitti_occlusion_level", "wrap_angle"]
+__all__ = ["kitti_line", "parse_kitti", "kitti_occlusion_level", "wrap_angle", "calib_text", "parse_calib"]
 
 
 def kitti_occlusion_level(visible_fraction: float) -> int:
@@ -71,5 +75,34 @@ def write_kitti(path: str, frame: Frame) -> str:
     return write_text(path, "".join(line + "\n" for line in lines))
 
 
+def calib_text(P2: Sequence[Sequence[float]], level_from_world: Sequence[Sequence[float]]) -> str:
+    """A KITTI calibration file: P0..P3 = P2 (the frame's camera), R0_rect = I, and
+    Tr_velo_to_cam = level_from_world (the world playing the velodyne's part)."""
+    p = " ".join(f"{v:.12e}" for row in P2 for v in row)
+    t = " ".join(f"{v:.12e}" for row in level_from_world for v in row)
+    eye = " ".join(f"{v:.12e}" for v in (1, 0, 0, 0, 1, 0, 0, 0, 1))
+    ident34 = " ".join(f"{v:.12e}" for v in (1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0))
+    return (f"P0: {p}\nP1: {p}\nP2: {p}\nP3: {p}\nR0_rect: {eye}\nTr_velo_to_cam: {t}\n"
+            f"Tr_imu_to_velo: {ident34}\n")
+
+
+def write_kitti_calib(path: str, frame: Frame) -> str:
+    kf = frame.meta["kitti_frame"]
+    return write_text(path, calib_text(kf["P2"], kf["level_from_world"]))
+
+
+def parse_calib(text: str) -> Dict[str, List[float]]:
+    """The matrices of a KITTI calibration file by name (flat lists)."""
+    out: Dict[str, List[float]] = {}
+    for line in text.splitlines():
+        if ":" in line:
+            k, v = line.split(":", 1)
+            out[k.strip()] = [float(x) for x in v.split()]
+    return out
+
+
 register(OutputKind("kitti", "KITTI labels with 2D boxes and 3D boxes in the camera frame (kitti/NNNNNN.txt)",
                     order=90, directory="kitti", extension=".txt", write=write_kitti, module=__name__))
+register(OutputKind("kitti_calib", "KITTI calibration per frame (kitti_calib/NNNNNN.txt): P2 projects the labels' "
+                    "level camera frame into the image", order=95, directory="kitti_calib", extension=".txt",
+                    write=write_kitti_calib, module=__name__))

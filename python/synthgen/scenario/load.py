@@ -69,6 +69,8 @@ def _check_assets(tree: Any, loc: Loc, ctx: ValidationContext, kind: str) -> Non
 
 def _check(spec: Validated, ctx: ValidationContext) -> None:
     for i, o in enumerate(spec["objects"]):
+        if o.get("forward") and o.get("up") and o["forward"][1] == o["up"][1]:
+            ctx.error(o.locs["up"], f"forward ({o['forward']}) and up ({o['up']}) must be different axes")
         if "asset" in o.given:
             _check_assets(o["asset"], o.locs["asset"], ctx, "mesh")
     lights = spec["lights"]

@@ -73,6 +73,8 @@ class ObjectSpec:
     scale: float
     yaw: float
     material: Optional[PluginSpec]
+    forward: Optional[str] = None  #: the model's forward axis, when the scenario names it
+    up: Optional[str] = None       #: the model's up axis, when the scenario names it
     #: The sampled value of every randomizer key (None: not given), in sample order.
     randomizers: Dict[str, Any] = field(default_factory=dict)
 
@@ -98,6 +100,7 @@ def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> Ob
     return ObjectSpec(index=index, kind=kind, class_index=class_index, class_name=str(o["class"]), name=o.get("name"),
                       shape=(shape_key, o[shape_key]), size=tuple(float(x) for x in o["size"]),
                       scale=float(o["scale"]), yaw=float(o["yaw"]), material=PluginSpec.of(mat) if mat else None,
+                      forward=o.get("forward"), up=o.get("up"),
                       randomizers={r.key: o.get(r.key) for r in randomize.randomizers()})
 
 

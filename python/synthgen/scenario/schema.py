@@ -17,6 +17,7 @@ from ..schema.errors import Loc, ValidationContext, show_value
 from ..schema.fields import (EMPTY, REQUIRED, Bool, Choice, Field, FilePath, Integer, ListOf, Number, Record, String,
                              Vector)
 from ..schema.plugins import plugin_record, settings_record
+from ..scene.assets import AXES
 from ..schema.random import R, randomized
 
 __all__ = ["SCENARIO_SCHEMA", "MATERIAL", "LIGHT", "CAMERA", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS",
@@ -58,6 +59,10 @@ OBJECT = Record(
                       doc="box size or sphere diameter, metres")),
      "scale": R(Number(1.0, min=0.0, min_open=True, doc="uniform scale of the shape")),
      "yaw": R(Number(0.0, min=-360.0, max=720.0, doc="rotation about +y, degrees")),
+     "forward": Choice(list(AXES), None, doc="the model's forward axis (default: the asset's, else +x): KITTI "
+                                             "length and heading follow it"),
+     "up": Choice(list(AXES), None, doc="the model's up axis (default: the asset's, else +y): turned to the "
+                                        "world's up"),
      "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None),
      **{r.key: r.schema for r in randomize.randomizers()}},
     one_of=[SHAPE_KEYS], doc="an object kind placed on the ground")

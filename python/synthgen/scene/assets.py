@@ -35,6 +35,8 @@ from .._core import SynthgenError
 __all__ = ["AssetError", "manifest_dir", "load_manifest", "cache_dir", "fetch", "resolve", "KINDS"]
 
 KINDS = ("mesh", "hdr", "texture", "photo", "svg", "image", "data")
+#: Axes a model may declare as its forward and up directions (``forward: "+z"``).
+AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
 _REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 
 
@@ -75,7 +77,8 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             where = f"{path}: assets[{i}]"
             if not isinstance(e, dict):
                 raise AssetError(f"{where}: expected a mapping")
-            allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions"}
+            allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions",
+                       "forward", "up"}
             for k in e:
                 if k not in allowed:
                     m = difflib.get_close_matches(str(k), allowed, n=1)
@@ -92,6 +95,11 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                 raise AssetError(f"{where} ({e['id']}): a deb or npm source needs the 'path' inside the package")
             if not (isinstance(e["sha256"], str) and len(e["sha256"]) == 64):
                 raise AssetError(f"{where} ({e['id']}): sha256 must be 64 hex digits")
+            for k in ("forward", "up"):
+                if k in e and e[k] not in AXES:
+                    raise AssetError(f"{where} ({e['id']}): {k} must be one of {', '.join(AXES)}, got {e[k]!r}")
+            if "forward" in e and "up" in e and e["forward"][1] == e["up"][1]:
+                raise AssetError(f"{where} ({e['id']}): forward and up must be different axes")
             if e["id"] in out:
                 raise AssetError(f"{where}: duplicate id '{e['id']}'")
             out[e["id"]] = dict(e, manifest=path)
