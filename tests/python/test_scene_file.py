@@ -125,7 +125,7 @@ def test_unknown_choice_suggests_and_lists_values(tmp_path):
 def test_key_of_other_variant_is_explained(tmp_path):
     e = error_of(write(tmp_path, CAMERA + "objects: [{primitive: box, radius: 2, class_id: 1}]\n"))
     assert e.key_path == "objects[0].radius"
-    assert "not allowed with primitive 'box' (only with sphere)" in str(e)
+    assert "not allowed with primitive 'box' (only with sphere, ground)" in str(e)
 
 
 def test_missing_required_key_points_at_the_entry(tmp_path):

@@ -52,9 +52,13 @@ class FrameView:
         if self.ground is not None:
             self.scene.set_instance_visible(self.ground, True)
 
-    def move(self, o: PlacedObject, world: np.ndarray) -> None:
+    def move(self, o: PlacedObject, world: np.ndarray, post: Optional[np.ndarray] = None) -> None:
+        """Puts an object (and its post, if it has one) where ``world`` says."""
         o.world = world
         self.scene.set_instance_transform(o.instance, world.astype(np.float32))
+        if post is not None:
+            o.post_world = post
+            self.scene.set_instance_transform(self.decor[o.decor], post.astype(np.float32))
 
 
 @dataclass
@@ -108,11 +112,11 @@ def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int) -> Tuple[int, 
 
 def _put(view: FrameView, o: PlacedObject, spot: Tuple[float, float]) -> None:
     base = P.translate([spot[0], 0.0, spot[1]]) @ P.rotate([0.0, 1.0, 0.0], float(o.spec.yaw))
-    view.move(o, base @ o.local)
-    if o.decor is not None:
-        h = float(o.mount_height)
-        pole = base @ P.translate([0.0, 0.5 * h, 0.03]) @ P.scale([0.05, max(h, 1e-3), 0.05])
-        view.scene.set_instance_transform(view.decor[o.decor], pole.astype(np.float32))
+    post = None
+    if o.decor is not None:  # a 5 cm post behind the panel, from the ground to its middle
+        h = float(o.post_height)
+        post = base @ P.translate([0.0, 0.5 * h, 0.03]) @ P.scale([0.05, max(h, 1e-3), 0.05])
+    view.move(o, base @ o.local, post)
 
 
 def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str, Any],
@@ -148,11 +152,11 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
                     fails.append((k, f"visible fraction {frac:.3f} > {placement['max_visible_fraction']}"))
             view.show([s is not None for s in spots])
         if best is None or len(fails) < len(best[1]):
-            best = (spots, fails, [o.world for o in objects])
+            best = (spots, fails, [(o.world, o.post_world) for o in objects])
         if not fails:
             break
     spots, fails, worlds = best
-    for o, world in zip(objects, worlds):
+    for o, (world, post) in zip(objects, worlds):  # the best layout, posts included
         if world is not None:
-            view.move(o, world)
+            view.move(o, world, post)
     return Layout(spots, {k: reason for k, reason in fails}, attempts)

@@ -28,11 +28,12 @@ class PlacedObject:
     local: np.ndarray              #: object_from_shape: scale and lift onto the ground
     radius: float                  #: footprint radius on the ground
     dims: np.ndarray               #: box size in metres (x, y, z)
-    mount_height: Optional[float] = None   #: sign / plate: height of its lower edge (a post below)
+    post_height: Optional[float] = None    #: sign / plate: the top of the post it stands on
     #: The model's forward direction in its own coordinates (KITTI's heading follows it).
     forward: Tuple[float, float, float] = (1.0, 0.0, 0.0)
     decor: Optional[int] = None    #: index of its post in the decor pool
     world: Optional[np.ndarray] = None     #: world_from_object once placed
+    post_world: Optional[np.ndarray] = None  #: world_from_object of its post once placed
     #: What each randomizer did (recorded in the metadata under its key), in sample order.
     info: Dict[str, Any] = field(default_factory=dict)
 

@@ -71,10 +71,11 @@ class FrameRenderer:
         self.ground_material: Optional[int] = None
         self.pole_material: Optional[int] = None
         self.default_material: Optional[int] = None
-        self.mapped: set = set()          # instances that have a per-instance material map
+        self.mapped: Set[int] = set()     # instances that have a per-instance material map
+        self.objects: List[PlacedObject] = []
         g = scenario.spec["ground"]
         if g["enabled"]:
-            pl = P.plane(float(g["size"]), float(g["size"]))
+            pl = P.ground() if g["size"] is None else P.plane(float(g["size"]), float(g["size"]))
             gm = self.scene.add_mesh(pl["positions"], pl["indices"], normals=pl["normals"], uvs=pl["uvs"], name="ground")
             self.ground = self.scene.add_instance(gm, np.eye(4), class_id=0, instance_id=0)
 
@@ -87,6 +88,7 @@ class FrameRenderer:
         self._set_lights(spec.lights)
         self._set_ground(spec)
         objects = self._set_objects(spec)
+        self.objects = objects  # the frame's placed objects (for tools and tests)
         t_update = time.perf_counter()
 
         view = FrameView(self.scene, objects, self.decor.ids, self.ground, sc.resolution, self.threads)
@@ -157,7 +159,7 @@ class FrameRenderer:
         n_decor = 0
         for o in spec.objects:
             placed = self._set_object(spec, o)
-            if placed.mount_height is not None:
+            if placed.post_height is not None:
                 placed.decor, n_decor = n_decor, n_decor + 1
             objects.append(placed)
         pole_mesh = self.shapes.get("primitive", "box").mesh_id
@@ -176,7 +178,7 @@ class FrameRenderer:
         k = o.index
         kind, value = o.shape
         shape = self.shapes.get(kind, value)
-        local, radius, dims, mount = self._local(o, shape)
+        local, radius, dims, post = self._local(o, shape)
         rng = frame_rng(spec.seed, spec.frame, 100 + k)
         # The object's materials: one (a scenario material, grey, or what a sign or plate
         # makes), or -- a model with materials of its own -- one per material of its mesh,
@@ -211,7 +213,7 @@ class FrameRenderer:
         self._set_material_map(inst, material_map)
         info = {r.key: done[r.key] for r in randomize.randomizers() if r.key in done}
         forward = _AXIS[o.forward or shape.forward or "+x"] if kind in ("primitive", "mesh", "asset") else _AXIS["+x"]
-        return PlacedObject(o, shape, inst, local, radius, dims, mount, forward=forward, info=info)
+        return PlacedObject(o, shape, inst, local, radius, dims, post, forward=forward, info=info)
 
     def _set_material_map(self, inst: int, material_map: Dict[int, int]) -> None:
         """Per-instance materials of a model that keeps its own (only instances that have or
@@ -231,7 +233,7 @@ class FrameRenderer:
         return self.default_material
 
     def _local(self, o: ObjectSpec, shape: Shape) -> Tuple[np.ndarray, float, np.ndarray, Optional[float]]:
-        """(object_from_shape scale and lift, footprint radius, box size in metres, mount
+        """(object_from_shape scale and lift, footprint radius, box size in metres, post
         height of a post or None)."""
         kind, value = o.shape
         if kind not in ("primitive", "mesh", "asset"):

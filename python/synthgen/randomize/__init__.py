@@ -67,8 +67,9 @@ class Randomizer:
         raise NotImplementedError
 
     def placement(self, value: Mapping[str, Any], scale: float) -> Tuple[np.ndarray, float, np.ndarray, float]:
-        """(object_from_shape 4x4, footprint radius, box dimensions, mount height) of an
-        object (``shape`` randomizers); the mount height (>= 0) puts a post below it."""
+        """(object_from_shape 4x4, footprint radius, box dimensions, post height) of an object
+        (``shape`` randomizers): a post from the ground up to that height (behind the panel,
+        up to its middle, so the panel sits on it at any size and shape)."""
         raise NotImplementedError
 
     def apply(self, ctx: ObjectContext, value: Any, materials: List[int]) -> Tuple[List[int], Any]:

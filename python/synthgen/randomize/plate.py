@@ -38,7 +38,7 @@ class Plate(Randomizer):
         m = np.eye(4)
         m[:3, :3] = np.diag([w, h, 0.01])
         m[1, 3] = mount + 0.5 * h
-        return m, 0.5 * w, np.array([w, h + mount, 0.01]), mount
+        return m, 0.5 * w, np.array([w, h + mount, 0.01]), mount + 0.5 * h
 
     def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
         reg = plates.random_registration(value["country"], ctx.rng)

@@ -42,7 +42,7 @@ class Sign(Randomizer):
         m = np.eye(4)
         m[:3, :3] = np.diag([s, s, 1.0])
         m[1, 3] = mount
-        return m, 0.5 * s, np.array([s, s + mount, 0.02]), mount
+        return m, 0.5 * s, np.array([s, s + mount, 0.02]), mount + 0.5 * s
 
     def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
         s = signs.render_sign(value["family"], value.get("text"), 256)

@@ -55,7 +55,7 @@ class CameraSpec:
 @dataclass
 class GroundSpec:
     enabled: bool
-    size: float
+    size: Optional[float]   #: None: the ground reaches the horizon
     material: PluginSpec
 
 
@@ -125,7 +125,7 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
         frame=int(frame), seed=sc.seed,
         camera=CameraSpec(fov_y=float(camera["fov_y"]), intrinsics=intrinsics, pose=camera["pose"]),
         lights=[PluginSpec.of(li) for li in lights],
-        ground=GroundSpec(enabled=bool(ground["enabled"]), size=float(ground["size"]),
+        ground=GroundSpec(enabled=bool(ground["enabled"]), size=None if ground["size"] is None else float(ground["size"]),
                           material=PluginSpec.of(ground["material"])),
         objects=objects, sampled={k: D.plain(v) for k, v in rec.items()},
         post=[PluginSpec(str(p["type"]), {k: v for k, v in p.items() if k != "type"}) for p in steps])

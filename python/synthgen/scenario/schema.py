@@ -108,7 +108,10 @@ SCENARIO_SCHEMA = Record(
      "camera": CAMERA,
      "lights": R(ListOf(LIGHT, REQUIRED, min_items=1), doc="lights, or a choice of light set-ups",
                  default=[{"type": "sky", "strength": 0.02}]),
-     "ground": Record({"size": Number(40.0, min=0.0, min_open=True), "enabled": Bool(True),
+     "ground": Record({"size": Number(None, min=0.0, min_open=True,
+                                      doc="edge length in metres of a square ground (default: the ground reaches "
+                                          "the horizon)"),
+                       "enabled": Bool(True),
                        "material": R(MATERIAL, default={"type": "diffuse", "albedo": [0.3, 0.3, 0.3]})},
                       default=EMPTY, doc="ground plane y = 0 (class 0, unlabelled)"),
      "objects": ListOf(OBJECT, REQUIRED, min_items=1, doc="object kinds"),

@@ -41,7 +41,7 @@ DEMO_SCENE: Dict[str, Any] = {
         "brushed_aluminium": {"type": "conductor", "metal": "aluminium", "roughness": 0.3, "anisotropy": 0.8},
     },
     "objects": [
-        {"name": "ground", "primitive": "plane", "size": [400.0, 400.0], "material": "ground", "class_id": 1},
+        {"name": "ground", "primitive": "ground", "material": "ground", "class_id": 1},
         {"name": "car-paint sphere", "primitive": "sphere", "radius": 0.7, "translate": [-1.5, 0.7, 0.4],
          "material": "car_paint", "class_id": 2},
         {"name": "gold sphere", "primitive": "sphere", "radius": 0.45, "translate": [0.35, 0.45, -0.9],

@@ -47,7 +47,7 @@ def _panel_mesh(width: float = 1.4, height: float = 0.8, bend: float = 0.25, n: 
 
 def _tile(obj: str, effect: str, params: Dict[str, Any], w: int, h: int, spp: int) -> np.ndarray:
     s = Scene()
-    ground = P.plane(20.0, 20.0)
+    ground = P.ground()
     s.add_instance(s.add_mesh(ground["positions"], ground["indices"], normals=ground["normals"]), np.eye(4),
                    material_id=s.add_material("diffuse", {"albedo": 0.35}))
     target = (0.0, 0.55, 0.0)

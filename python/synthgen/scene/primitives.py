@@ -30,6 +30,31 @@ def plane(size_x: float = 1.0, size_z: float = 1.0) -> dict:
     return _mesh(p, idx, n, uv)
 
 
+def ground(radius: float = 1.0e5, cell: float = 0.5, growth: float = 1.25) -> dict:
+    """The y = 0 plane out to ``radius`` metres in every direction (by default far enough
+    that its edge lies below the horizon by less than a pixel), normal +y, uv = (x, z) in
+    metres (textures tile by their uv scale).
+
+    A grid whose cells grow geometrically from ``cell`` metres at the origin by ``growth``
+    per step: a hit point's floating-point error bound grows with its triangle's
+    coordinates (interaction.h), so the ground near the origin, where the objects stand,
+    stays as precise as a small plane while the far cells reach the horizon."""
+    ticks = [0.0]
+    step = float(cell)
+    while ticks[-1] < radius:
+        ticks.append(min(ticks[-1] + step, float(radius)))
+        step *= growth
+    t = np.array([-x for x in reversed(ticks[1:])] + ticks, np.float64)
+    n = len(t)
+    xs, zs = np.meshgrid(t, t, indexing="ij")  # vertex (i, j) at (t[i], 0, t[j])
+    p = np.stack([xs.ravel(), np.zeros(n * n), zs.ravel()], -1)
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    a, b, c, d = i * n + j, (i + 1) * n + (j + 1), (i + 1) * n + j, i * n + (j + 1)
+    # counter-clockwise seen from +y (as plane()): (a, b, c) and (a, d, b)
+    idx = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, d, b], -1).reshape(-1, 3)])
+    return _mesh(p, idx, np.tile([0.0, 1.0, 0.0], (n * n, 1)), p[:, [0, 2]])
+
+
 def box(size=(1.0, 1.0, 1.0)) -> dict:
     """Axis-aligned box centred at the origin with flat-shaded faces (24 vertices)."""
     sx, sy, sz = (0.5 * float(s) for s in size)

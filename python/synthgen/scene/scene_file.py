@@ -20,7 +20,7 @@ A scene file is a YAML mapping::
     objects:                       # at least one
       - name: ball                 # optional, reported in meta.json
         primitive: sphere          # sphere {radius, segments, rings} | box {size} |
-        radius: 0.5                #   plane {size} (the y = 0 plane, normal +y)
+        radius: 0.5                #   plane {size} | ground {radius} (to the horizon)
         class_id: 1                # 0..65535 (0 is also the background's label)
         material: red              # optional; default: the mesh file's materials / grey
         translate: [0, 0.5, 0]     # world_from_object = T * R * S ...
@@ -109,7 +109,7 @@ MESH_FILE = Record({
 OBJECT = Record({
     "name": String(None, doc="free name, reported in meta.json"),
     "mesh": MESH_FILE,
-    "primitive": Choice(["sphere", "box", "plane"], doc="built-in procedural mesh"),
+    "primitive": Choice(["sphere", "box", "plane", "ground"], doc="built-in procedural mesh"),
     "class_id": Integer(min=0, max=_ID_MAX, doc="semantic class label (0 is also the background)"),
     "instance_id": Integer(None, min=1, max=_ID_MAX, doc="instance label (default: instance handle + 1)"),
     "material": String(None, doc="name of a material under 'materials' (default: the mesh's own)"),
@@ -131,6 +131,11 @@ OBJECT = Record({
     "plane": {
         "size": Vector(2, (1.0, 1.0), min=0, min_open=True, broadcast=True,
                        doc="edge lengths along x and z (the y = 0 plane, normal +y)"),
+    },
+    "ground": {
+        "radius": Number(1.0e5, min=0, min_open=True,
+                         doc="the y = 0 plane out to this distance in metres (the default reaches the horizon); "
+                             "uv = (x, z) in metres"),
     },
 }, doc="an instance of a mesh file or primitive",
     one_of=[("mesh", "primitive")],
@@ -244,6 +249,8 @@ def _primitive_mesh(obj: Validated) -> Tuple[tuple, Dict[str, np.ndarray], np.nd
                 np.array([obj["radius"]] * 3))
     if kind == "box":
         return (kind,), primitives.box((1.0, 1.0, 1.0)), np.array(obj["size"])
+    if kind == "ground":
+        return (kind, obj["radius"]), primitives.ground(obj["radius"]), np.ones(3)
     sx, sz = obj["size"]
     return (kind,), primitives.plane(1.0, 1.0), np.array([sx, 1.0, sz])
 
