@@ -12,6 +12,8 @@ from ..schema.plugins import plugin_info
 EXIT_OK = 0
 EXIT_INPUT_ERROR = 2
 EXIT_INTERRUPTED = 130
+#: `synthgen run`: every frame written, but some objects were dropped (placement limits).
+EXIT_DROPPED = 3
 
 
 def positive_int(text: str) -> int:

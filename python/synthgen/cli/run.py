@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 
 from . import Command, register
-from .common import EXIT_INTERRUPTED, positive_int
+from .common import EXIT_DROPPED, EXIT_INTERRUPTED, positive_int
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -30,9 +30,12 @@ def run(args: argparse.Namespace) -> int:
     print(summary.text())
     if summary["interrupted"]:
         return EXIT_INTERRUPTED
-    return 0 if not summary["failures"] else 1
+    if summary["failures"]:
+        return 1
+    return EXIT_DROPPED if summary["dropped"] else 0
 
 
 register(Command("run", "render a scenario into a labelled dataset",
                  "Render the frames of a scenario file into a dataset: images, depth, instance and semantic masks, "
-                 "COCO / YOLO / KITTI labels, per-frame metadata.", add_arguments, run, order=30, module=__name__))
+                 "COCO / YOLO / KITTI labels, per-frame metadata. Exit status: 0 done, 1 some frames failed, 3 every "
+                 "frame written but some objects dropped (placement limits not met), 2 bad input, 130 interrupted.", add_arguments, run, order=30, module=__name__))

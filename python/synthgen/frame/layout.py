@@ -124,7 +124,9 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
     """Tries layouts until every object meets the visibility criteria (or the retries run
     out); leaves the scene in the best layout found, every object shown or hidden."""
     objects = view.objects
-    need_amodal = placement["min_visible_fraction"] > 0.0 or placement["max_visible_fraction"] < 1.0
+    limits = [{k: o.spec.limits.get(k, placement[k]) for k in ("min_pixels", "min_visible_fraction",
+                                                               "max_visible_fraction")} for o in objects]
+    need_amodal = any(li["min_visible_fraction"] > 0.0 or li["max_visible_fraction"] < 1.0 for li in limits)
     best = None
     attempts = 0
     for attempt in range(placement["max_retries"] + 1):
@@ -140,16 +142,19 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
         for k, spot in enumerate(spots):
             if spot is None:
                 fails.append((k, "no free spot in the placement region"))
-            elif counts[k + 1] < max(1, placement["min_pixels"]):
-                fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {placement['min_pixels']}"))
+            elif counts[k + 1] < max(1, limits[k]["min_pixels"]):
+                fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {limits[k]['min_pixels']}"))
         if need_amodal and not fails:
             for k in range(len(objects)):
+                lim = limits[k]
+                if lim["min_visible_fraction"] <= 0.0 and lim["max_visible_fraction"] >= 1.0:
+                    continue
                 inside, _ = amodal_pixels(view, camera, k)
                 frac = counts[k + 1] / inside if inside else 0.0
-                if frac < placement["min_visible_fraction"]:
-                    fails.append((k, f"visible fraction {frac:.3f} < {placement['min_visible_fraction']}"))
-                elif frac > placement["max_visible_fraction"]:
-                    fails.append((k, f"visible fraction {frac:.3f} > {placement['max_visible_fraction']}"))
+                if frac < lim["min_visible_fraction"]:
+                    fails.append((k, f"visible fraction {frac:.3f} < {lim['min_visible_fraction']}"))
+                elif frac > lim["max_visible_fraction"]:
+                    fails.append((k, f"visible fraction {frac:.3f} > {lim['max_visible_fraction']}"))
             view.show([s is not None for s in spots])
         if best is None or len(fails) < len(best[1]):
             best = (spots, fails, [(o.world, o.post_world) for o in objects])

@@ -51,6 +51,14 @@ class RunSummary(dict):
             st = ", ".join(f"{k[:-2]} {v:.3f}" for k, v in self["stage_s"].items())
             lines.append(f"mean seconds/frame: {self['mean_s_per_frame']:.3f} (per stage: {st}); "
                          f"wall {self['wall_s']:.1f} s, {self['frames_per_s']:.3f} frames/s")
+        dropped = self.get("dropped", [])
+        if dropped:
+            n = sum(len(d["objects"]) for d in dropped)
+            lines.append(f"objects dropped (their placement limits not met after the retries): {n} in "
+                         f"{len(dropped)} frame(s); the frames are kept without them")
+            for d in dropped[:10]:
+                lines.append(f"  frame {d['frame']}: " + "; ".join(f"object {o['index']} ({o['class']}): "
+                                                              f"{o['reason']}" for o in d["objects"]))
         for f in self.get("incomplete", [])[:20]:
             lines.append(f"  frame {f['frame']} was incomplete and is rendered again: {f['reason']}")
         if self.get("interrupted"):
@@ -126,6 +134,8 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         mean_s_per_frame=stages.get("total_s", 0.0) / m,
         stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
         interrupted=interrupted, temporaries_removed=removed, complete=len(complete),
-        incomplete=[{"frame": k, "reason": r} for k, r in broken.items()])
+        incomplete=[{"frame": k, "reason": r} for k, r in broken.items()],
+        dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),
+                       key=lambda d: d["frame"]))
     write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
     return summary

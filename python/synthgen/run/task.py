@@ -34,7 +34,8 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) 
         timings["write_s"] = time.perf_counter() - t1
         timings["total_s"] = time.perf_counter() - t0
         _WORKER["frames"] += 1
-        dropped = [o["dropped"] for o in meta["objects"] if o.get("dropped")]
+        dropped = [{"index": o["index"], "class": o["class"], "reason": o["dropped"]}
+                   for o in meta["objects"] if o.get("dropped")]
         return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid()}
     except Exception as e:  # reported per frame; the run goes on
         return {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",

@@ -81,6 +81,12 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
                 if li.get("asset") is not None:
                     _check_assets(li["asset"], li.locs["asset"], ctx, "hdr")
     pl = spec["placement"]
+    for o in spec["objects"]:
+        lo = o["min_visible_fraction"] if o["min_visible_fraction"] is not None else pl["min_visible_fraction"]
+        hi = o["max_visible_fraction"] if o["max_visible_fraction"] is not None else pl["max_visible_fraction"]
+        if hi < lo:
+            ctx.error(o.locs.get("max_visible_fraction", o.locs.get("min_visible_fraction", o.loc)),
+                      f"max_visible_fraction {hi} < min_visible_fraction {lo}")
     if pl["max_visible_fraction"] < pl["min_visible_fraction"]:
         ctx.error(pl.locs.get("max_visible_fraction", pl.loc), "max_visible_fraction must be >= min_visible_fraction")
     x0, z0, x1, z1 = spec["placement"]["region"]

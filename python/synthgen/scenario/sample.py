@@ -73,6 +73,9 @@ class ObjectSpec:
     scale: float
     yaw: float
     material: Optional[PluginSpec]
+    #: Visibility limits of this entry (min_pixels, min/max_visible_fraction) that override
+    #: the placement's.
+    limits: Dict[str, Any] = field(default_factory=dict)
     forward: Optional[str] = None  #: the model's forward axis, when the scenario names it
     up: Optional[str] = None       #: the model's up axis, when the scenario names it
     #: The sampled value of every randomizer key (None: not given), in sample order.
@@ -94,6 +97,10 @@ class FrameSpec:
     post: List[PluginSpec] = field(default_factory=list)
 
 
+#: The visibility limits an object entry may set for its instances.
+LIMIT_KEYS = ("min_pixels", "min_visible_fraction", "max_visible_fraction")
+
+
 def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> ObjectSpec:
     shape_key = next(k for k in SHAPE_KEYS if o.get(k) is not None)
     mat = o.get("material")
@@ -101,6 +108,7 @@ def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> Ob
                       shape=(shape_key, o[shape_key]), size=tuple(float(x) for x in o["size"]),
                       scale=float(o["scale"]), yaw=float(o["yaw"]), material=PluginSpec.of(mat) if mat else None,
                       forward=o.get("forward"), up=o.get("up"),
+                      limits={k: o[k] for k in LIMIT_KEYS if o.get(k) is not None},
                       randomizers={r.key: o.get(r.key) for r in randomize.randomizers()})
 
 

@@ -64,6 +64,12 @@ OBJECT = Record(
      "up": Choice(list(AXES), None, doc="the model's up axis (default: the asset's, else +y): turned to the "
                                         "world's up"),
      "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None),
+     "min_pixels": Integer(None, min=0, doc="visible pixels of each instance (default: placement.min_pixels)"),
+     "min_visible_fraction": Number(None, min=0.0, max=1.0,
+                                    doc="visible / amodal pixels of each instance (default: placement's)"),
+     "max_visible_fraction": Number(None, min=0.0, max=1.0,
+                                    doc="at most this visible (default: placement's; < 1 asks for occluded or "
+                                        "truncated instances)"),
      **{r.key: r.schema for r in randomize.randomizers()}},
     one_of=[SHAPE_KEYS], doc="an object kind placed on the ground")
 
