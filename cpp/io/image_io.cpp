@@ -4,11 +4,69 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <string>
 
 namespace {
 
 using sg::ImageData;
+
+/// The largest image synthgen decodes (pixels): larger headers are refused before any
+/// allocation (a corrupt or hostile file cannot ask for gigabytes).
+constexpr double k_max_pixels = 1 << 28;  // 268 Mpixel (16384^2)
+
+/// Captures what format libraries (libpng, libjpeg) print to stderr while it lives, so their
+/// warnings never reach the user's terminal; the text is added to the error of a failed read.
+/// NOTE: fd 2 is process-wide: reads are serialised while it is redirected.
+class StderrCapture {
+ public:
+  StderrCapture() : m_lock(mutex()) {
+    std::fflush(stderr);
+    m_file = std::tmpfile();
+    m_saved = dup(2);
+    if (m_file && m_saved >= 0) m_active = dup2(fileno(m_file), 2) >= 0;
+  }
+  ~StderrCapture() { restore(); if (m_file) std::fclose(m_file); }
+  /// Restores stderr; returns what was printed (one line, trimmed).
+  std::string restore() {
+    if (!m_active) return m_text;
+    std::fflush(stderr);
+    dup2(m_saved, 2);
+    close(m_saved);
+    m_active = false;
+    std::rewind(m_file);
+    char buf[512];
+    size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, m_file)) > 0 && m_text.size() < 4096) m_text.append(buf, n);
+    for (char& c : m_text)
+      if (c == '\n') c = ' ';
+    while (!m_text.empty() && m_text.back() == ' ') m_text.pop_back();
+    return m_text;
+  }
+
+ private:
+  static std::mutex& mutex() {
+    static std::mutex m;
+    return m;
+  }
+  std::lock_guard<std::mutex> m_lock;
+  std::FILE* m_file = nullptr;
+  int m_saved = -1;
+  bool m_active = false;
+  std::string m_text;
+};
+
+/// One line: format libraries' errors come with newlines.
+std::string one_line(std::string s) {
+  for (char& c : s)
+    if (c == '\n') c = ',';
+  while (!s.empty() && (s.back() == ';' || s.back() == ' ')) s.pop_back();
+  return s;
+}
 
 float srgb_to_linear(float c) {
   // NOTE: IEC 61966-2-1 sRGB electro-optical transfer function.
@@ -24,9 +82,15 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
     *error = "image has no pixels";
     return false;
   }
+  if (double(img->width) * img->height > k_max_pixels || img->channels > 64) {
+    *error = "image of " + std::to_string(img->width) + " x " + std::to_string(img->height) + " pixels x " +
+             std::to_string(img->channels) + " channels is larger than synthgen reads (at most 16384 x 16384 "
+             "pixels, 64 channels)";
+    return false;
+  }
   img->pixels.resize(size_t(img->width) * img->height * img->channels);
   if (!in->read_image(0, 0, 0, img->channels, OIIO::TypeDesc::FLOAT, img->pixels.data())) {
-    *error = "cannot decode image (" + in->geterror() + ")";
+    *error = "cannot decode image (" + one_line(in->geterror()) + ")";
     return false;
   }
   *is_float = spec.format.basetype == OIIO::TypeDesc::FLOAT || spec.format.basetype == OIIO::TypeDesc::HALF ||
@@ -42,15 +106,18 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
 
 bool load(const char* path, int space, ImageData* img, std::string* error) {
   try {
+    StderrCapture quiet;
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
-      std::string err = OIIO::geterror();
+      std::string err = one_line(OIIO::geterror());
       *error = "cannot read image (" + (err.empty() ? std::string("unknown error") : err) + ")";
       return false;
     }
     bool is_float;
     int alpha;
     if (!read_all(in.get(), img, &is_float, &alpha, error)) return false;
+    in->close();
+    quiet.restore();
     auto cs = sg::ColorSpace(space);
     bool decode = cs == sg::ColorSpace::SRGB || (cs == sg::ColorSpace::Auto && !is_float);
     if (decode) {
@@ -77,9 +144,10 @@ bool load_memory(const void* data, size_t size, const char* hint, ImageData* img
     // attribute; the ioproxy argument of ImageInput::open alone does not reach them.
     void* proxy = &reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    StderrCapture quiet;
     auto in = OIIO::ImageInput::open(std::string("embedded.") + hint, &config, &reader);
     if (!in) {
-      *error = "cannot decode embedded image (" + OIIO::geterror() + ")";
+      *error = "cannot decode embedded image (" + one_line(OIIO::geterror()) + ")";
       return false;
     }
     bool is_float;

@@ -60,10 +60,32 @@ static void check_obj_vertices(const std::string& path) {
         throw FileError(path, "line " + std::to_string(line_no) + ": vertex coordinate " + std::to_string(k + 1) +
                                   " is not a number");
       if (!std::isfinite(v))
-        throw FileError(path, "line " + std::to_string(line_no) + ": vertex has a non-finite (NaN or inf) coordinate");
+        throw FileError(path, "line " + std::to_string(line_no) + ": vertex coordinate " + std::to_string(k + 1) + " is " +
+                                  (std::isnan(v) ? "non-finite (NaN)" : "non-finite (infinite, or beyond the float range |x| > 3.4e38)"));
       p = end;
     }
   }
+}
+
+/// Why assimp found no reader, when the file's own header tells: a glTF binary whose
+/// declared length exceeds the file (truncated), an empty file; "" when nothing is known.
+static std::string diagnose_unreadable(const std::string& path) {
+  std::error_code ec;
+  uint64_t size = fs::file_size(path, ec);
+  if (ec) return "";
+  if (size == 0) return "the file is empty";
+  std::ifstream in(path, std::ios::binary);
+  unsigned char h[12] = {0};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  if (in.gcount() >= 4 && h[0] == 'g' && h[1] == 'l' && h[2] == 'T' && h[3] == 'F') {
+    if (in.gcount() < 12) return "a glTF binary (GLB) cut short inside its 12-byte header";
+    uint32_t declared = uint32_t(h[8]) | uint32_t(h[9]) << 8 | uint32_t(h[10]) << 16 | uint32_t(h[11]) << 24;
+    if (declared > size)
+      return "a glTF binary (GLB) truncated: its header declares " + std::to_string(declared) + " bytes, the file has " +
+             std::to_string(size);
+    return "a glTF binary (GLB) that assimp cannot parse (corrupt chunks?)";
+  }
+  return "";
 }
 
 ImportedModel import_mesh_file(const std::string& path) {
@@ -76,7 +98,10 @@ ImportedModel import_mesh_file(const std::string& path) {
   const aiScene* scene = importer.ReadFile(
       path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_JoinIdenticalVertices |
                 aiProcess_SortByPType | aiProcess_ValidateDataStructure);
-  if (!scene) throw FileError(path, std::string("cannot import mesh: ") + importer.GetErrorString());
+  if (!scene) {
+    std::string why = diagnose_unreadable(path);
+    throw FileError(path, "cannot import mesh: " + (why.empty() ? std::string(importer.GetErrorString()) : why));
+  }
   if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw FileError(path, "incomplete scene (the importer gave up)");
 
   ImportedModel model;

@@ -27,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     summary = run_scenario(args.scenario, args.output, count=args.count, workers=args.workers,
                            scheduler=args.scheduler, resume=args.resume, only=args.only, recycle=args.recycle,
                            progress=not args.no_progress)
-    print(summary.text())
+    print(summary.text(debug=getattr(args, "debug", False)))
     if summary["interrupted"]:
         return EXIT_INTERRUPTED
     if summary["failures"]:

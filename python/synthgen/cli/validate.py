@@ -11,14 +11,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..scenario import load_scenario
+    from ..scenario import check_inputs, load_scenario
 
     sc = load_scenario(args.scenario)
+    checked = check_inputs(sc)
+    files = ", ".join(f"{n} {k}{'s' if n != 1 else ''}" for k, n in sorted(checked.items())) or "no input files"
     print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "
-          f"classes: {', '.join(sc.class_names)})")
+          f"classes: {', '.join(sc.class_names)}; loaded {files})")
     return 0
 
 
 register(Command("validate", "check a scenario file without rendering",
-                 "Validate a scenario file: every error names file, line, column and key.", add_arguments, run,
+                 "Validate a scenario file and load every file it names (meshes, images, environment maps, "
+                 "assets, fonts) once: every error names file, line, column and key.", add_arguments, run,
                  order=50, module=__name__))

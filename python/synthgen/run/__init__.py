@@ -6,5 +6,5 @@
 - :mod:`.task` -- :func:`render_task`, what a worker does for one frame.
 """
 from .executors import DaskExecutor, LocalExecutor  # noqa: F401
-from .runner import RunSummary, remove_temporaries, run  # noqa: F401
+from .runner import ABORT_AFTER, RunSummary, remove_temporaries, run  # noqa: F401
 from .task import render_task  # noqa: F401

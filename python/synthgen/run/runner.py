@@ -20,11 +20,14 @@ from ..outputs.files import write_json
 from ..outputs.meta import completed_frames, frame_status
 from ..outputs.registry import frame_name
 from .manifest import build_manifest, check_manifest, write_manifest
-from ..scenario import load_scenario
+from ..scenario import check_inputs, load_scenario
 from .executors import DaskExecutor, LocalExecutor
 from .task import render_task
 
-__all__ = ["run", "RunSummary", "remove_temporaries"]
+__all__ = ["run", "RunSummary", "remove_temporaries", "ABORT_AFTER"]
+
+#: A run stops when this many frames failed with one and the same error before any succeeded.
+ABORT_AFTER = 3
 
 
 def remove_temporaries(out_dir: str) -> int:
@@ -42,11 +45,14 @@ def remove_temporaries(out_dir: str) -> int:
 class RunSummary(dict):
     """frames, failures (frame, reason), mean seconds per frame and per stage."""
 
-    def text(self) -> str:
+    def text(self, debug: bool = False) -> str:
+        """The summary; with ``debug``, each failed frame's traceback too."""
         lines = [f"frames rendered: {self['rendered']} (skipped as already complete: {self['skipped']}), "
                  f"failures: {len(self['failures'])}"]
         for f in self["failures"][:20]:
             lines.append(f"  frame {f['frame']}: {f['error']}")
+            if debug and f.get("traceback"):
+                lines.append("    " + f["traceback"].rstrip().replace("\n", "\n    "))
         if self["rendered"]:
             st = ", ".join(f"{k[:-2]} {v:.3f}" for k, v in self["stage_s"].items())
             lines.append(f"mean seconds/frame: {self['mean_s_per_frame']:.3f} (per stage: {st}); "
@@ -61,6 +67,8 @@ class RunSummary(dict):
                                                               f"{o['reason']}" for o in d["objects"]))
         for f in self.get("incomplete", [])[:20]:
             lines.append(f"  frame {f['frame']} was incomplete and is rendered again: {f['reason']}")
+        if self.get("aborted"):
+            lines.append(self["aborted"])
         if self.get("interrupted"):
             lines.append("interrupted: completed frames are kept; run again with --resume")
         return "\n".join(lines)
@@ -70,7 +78,8 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
         recycle: int = 200, progress: bool = True, threads: Optional[int] = None) -> RunSummary:
     """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`)."""
-    sc = load_scenario(scenario_path)  # validate before anything renders
+    sc = load_scenario(scenario_path)  # validate before anything renders ...
+    check_inputs(sc)                   # ... and load every input file once
     n = int(count) if count is not None else sc.count
     frames = list(only) if only is not None else list(range(n))
     os.makedirs(out_dir, exist_ok=True)
@@ -103,6 +112,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
             bar = tqdm(total=len(todo), unit="frame", desc="synthgen", dynamic_ncols=True)
         except ImportError:
             bar = None
+    aborted = ""
     try:
         for r in executor.map(render_task, args):
             (results if r["ok"] else failures).append(r)
@@ -110,6 +120,11 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
                 bar.update(1)
                 if not r["ok"]:
                     bar.write(f"frame {r['frame']} failed: {r['error']}")
+            if not results and len(failures) >= ABORT_AFTER and len({f["error"] for f in failures}) == 1:
+                # The same error on every frame so far: not a frame's bad luck but the scenario.
+                aborted = f"stopped after {len(failures)} frames failed with the same error and none succeeded"
+                executor.shutdown()
+                break
     except KeyboardInterrupt:
         interrupted = True
         executor.shutdown()
@@ -128,13 +143,13 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
             stages[k] = stages.get(k, 0.0) + v
     m = max(1, len(results))
     summary = RunSummary(
-        rendered=len(results), skipped=len(frames) - len(todo), failures=[{"frame": f["frame"], "error": f["error"]}
-                                                                         for f in failures],
+        rendered=len(results), skipped=len(frames) - len(todo),
+        failures=[{"frame": f["frame"], "error": f["error"], "traceback": f.get("traceback", "")} for f in failures],
         wall_s=wall, frames_per_s=len(results) / wall if wall > 0 else 0.0,
         mean_s_per_frame=stages.get("total_s", 0.0) / m,
         stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
         interrupted=interrupted, temporaries_removed=removed, complete=len(complete),
-        incomplete=[{"frame": k, "reason": r} for k, r in broken.items()],
+        incomplete=[{"frame": k, "reason": r} for k, r in broken.items()], aborted=aborted,
         dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),
                        key=lambda d: d["frame"]))
     write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))

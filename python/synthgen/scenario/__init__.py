@@ -27,8 +27,10 @@ A scenario is a YAML mapping (``scenarios/default.yaml`` is a complete example):
 Every value may be a distribution (:mod:`synthgen.schema.distributions`). Modules:
 :mod:`.schema` (the format, generated from the plugin declarations and the randomizer and
 output registries), :mod:`.load` (validation into a :class:`Scenario`), :mod:`.sample`
-(one frame's typed records from (seed, frame) only).
+(one frame's typed records from (seed, frame) only), :mod:`.inputs` (every input file loaded
+once, constant materials and lights created, before anything renders).
 """
+from .inputs import check_inputs  # noqa: F401
 from .load import Scenario, load_scenario, parse_scenario  # noqa: F401
 from .sample import (CameraSpec, FrameSpec, GroundSpec, ObjectSpec, PluginSpec, frame_rng,  # noqa: F401
                      sample_frame)

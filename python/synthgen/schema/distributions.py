@@ -3,7 +3,8 @@
 Any scalar, vector, colour or choice in a scenario may be written as a constant or as a
 mapping with one distribution key::
 
-    {uniform: [0.2, 0.8]}                 # scalar, or vectors: {uniform: [[0, 0, 0], [1, 1, 1]]}
+    {uniform: [0.2, 0.8]}                 # a number (on a colour or size: one number for every
+                                          #   component, a grey); per component: [[0, 0, 0], [1, 1, 1]]
     {normal: [mean, std]}                 # truncated to the slot's allowed range, or to
     {normal: [0, 1], min: -2, max: 2}     #   explicit min / max (rejection sampling)
     {loguniform: [0.01, 1]}               # log-uniform between two positive bounds
@@ -25,7 +26,7 @@ from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
-__all__ = ["Distribution", "Uniform", "Normal", "LogUniform", "IntUniform", "Choice", "HsvJitter", "DIST_KEYS",
+__all__ = ["Distribution", "Broadcast", "Uniform", "Normal", "LogUniform", "IntUniform", "Choice", "HsvJitter", "DIST_KEYS",
            "is_distribution_spec"]
 
 #: The keys that mark a mapping as a distribution.
@@ -77,6 +78,21 @@ class Uniform(Distribution):
 
     def spec(self) -> Dict[str, Any]:
         return {"uniform": [self.lo, self.hi]}
+
+
+class Broadcast(Distribution):
+    """One number drawn from ``inner`` standing for all ``size`` components of a vector (a
+    grey colour from ``{uniform: [0.2, 0.8]}``)."""
+
+    def __init__(self, inner: Distribution, size: int):
+        self.inner, self.size = inner, int(size)
+        self.kind = inner.kind
+
+    def sample(self, rng: np.random.Generator) -> Any:
+        return (float(self.inner.sample(rng)),) * self.size
+
+    def spec(self) -> Dict[str, Any]:
+        return self.inner.spec()
 
 
 class Normal(Distribution):

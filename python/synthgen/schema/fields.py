@@ -445,6 +445,9 @@ class Record(Field):
             self._missing_key(self.tag, self.fields[self.tag], loc, ctx)
         if self.tag is not None and self.tag in value:
             variant = self.fields[self.tag].validate(value[self.tag], loc.value(self.tag, value), ctx)
+        elif self.tag is not None and not self.fields[self.tag].required and self.fields[self.tag].default is not None:
+            variant = self.fields[self.tag].default  # a defaulted tag selects its variant (and its defaults)
+        if variant is not None:
             vrec = self.variants.get(variant)
             if vrec is not None:
                 fields.update(vrec.fields)

@@ -73,6 +73,12 @@ class Random(Field):
         args = value[kind]
         aloc = loc.value(kind, value)
         inner = self.inner
+        if isinstance(inner, Vector) and inner.broadcast and kind in ("uniform", "normal", "loguniform") and \
+                isinstance(args, (list, tuple)) and args and not any(isinstance(a, (list, tuple)) for a in args):
+            # Scalar bounds on a vector that a number stands for (a grey colour, a cube's size):
+            # one number is drawn and stands for every component (vector bounds draw each
+            # component on its own).
+            return D.Broadcast(Random(inner.element)._distribution(value, loc, ctx), inner.size)
         scalar = isinstance(inner, Number)
         if kind == "uniform":
             if isinstance(inner, Integer):

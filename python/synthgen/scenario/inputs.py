@@ -1,0 +1,148 @@
+"""Every input of a scenario, loaded once before anything renders.
+
+:func:`check_inputs` reads each file a scenario names -- meshes (through the same importer
+as the frames), images, environment maps, assets (fetched and checksummed) and the fonts of
+generated signs and plates -- and creates every material and light whose parameters are
+constants, so a broken file or an impossible combination of parameters is reported once, by
+``FILE:LINE:COLUMN: key.path: reason``, instead of failing every frame of a run.
+"""
+from __future__ import annotations
+
+import os
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+from .._core import Scene, SynthgenError
+from ..schema import distributions as D
+from ..schema.errors import Loc, SceneFileError, ValidationContext
+from ..schema.fields import InputPath, Validated
+from ..schema.plugins import given_params
+from .load import Scenario
+
+__all__ = ["check_inputs"]
+
+
+def _options(v: Any) -> List[Any]:
+    return list(v.options) if isinstance(v, D.Choice) else [v]
+
+
+def _constant(tree: Any) -> bool:
+    return not D.has_distribution(tree)
+
+
+class _Checker:
+    def __init__(self, sc: Scenario):
+        self.ctx = ValidationContext(sc.source, sc.base_dir)
+        self.scene = Scene()
+        self.seen: Dict[Tuple[str, str], None] = {}
+        self.fonts = False
+
+    def fail(self, loc: Loc, what: str, e: Exception) -> None:
+        raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path, f"{what}: {e}") from None
+
+    def once(self, kind: str, path: str, loc: Loc, load: Callable[[], Any]) -> None:
+        if (kind, path) in self.seen:
+            return
+        self.seen[(kind, path)] = None
+        try:
+            load()
+        except (SynthgenError, OSError) as e:
+            self.fail(loc, f"cannot use this {kind}", e)
+
+    def mesh(self, path: str, loc: Loc) -> None:
+        self.once("mesh", path, loc, lambda: self.scene.load_mesh_file(path))
+
+    def image(self, path: str, loc: Loc) -> None:
+        self.once("image", path, loc, lambda: self.scene.add_texture("image", {"file": path}))
+
+    def envmap(self, path: str, loc: Loc) -> None:
+        self.once("environment map", path, loc, lambda: self.scene.add_light("envmap", {"file": path}))
+
+    def asset(self, asset_id: Any, kind: str, loc: Loc) -> None:
+        from ..scene import assets
+
+        for a in _options(asset_id):
+            if a is None:
+                continue
+            try:
+                path = assets.resolve(a)
+            except (SynthgenError, OSError) as e:
+                self.fail(loc, f"cannot fetch asset '{a}'", e)
+            (self.mesh if kind == "mesh" else self.envmap)(path, loc)
+
+    def plugin(self, kind: str, rec: Any, loc: Loc) -> None:
+        """Creates a material or light whose parameters are all constants."""
+        for option in _options(rec):
+            if not isinstance(option, Validated) or not _constant(option):
+                continue
+            params = given_params(option)
+            if kind == "light":
+                if option.get("type") == "envmap":
+                    if option.get("file") is not None:
+                        self.envmap(str(option["file"]), option.locs.get("file", loc))
+                    if option.get("asset") is not None:
+                        self.asset(option["asset"], "hdr", option.locs.get("asset", loc))
+                    continue
+            try:
+                if kind == "material":
+                    self.scene.add_material(str(option["type"]), params)
+                else:
+                    self.scene.add_light(str(option["type"]), params)
+            except SynthgenError as e:
+                self.fail(option.loc, f"this {kind} cannot be created", e)
+
+    def lights(self, lights: Any, loc: Loc) -> None:
+        for setup in _options(lights):
+            for i, li in enumerate(setup):
+                self.plugin("light", li, li.loc if isinstance(li, Validated) else loc)
+                if isinstance(li, Validated) and not _constant(li) and li.get("type") == "envmap":
+                    for f in _options(li.get("file")):
+                        if isinstance(f, InputPath):
+                            self.envmap(str(f), li.locs.get("file", li.loc))
+                    if li.get("asset") is not None:
+                        self.asset(li["asset"], "hdr", li.locs.get("asset", li.loc))
+
+    def objects(self, objects: List[Validated]) -> None:
+        for o in objects:
+            if o.get("mesh") is not None:
+                self.mesh(str(o["mesh"]), o.locs["mesh"])
+            if o.get("asset") is not None:
+                self.asset(o["asset"], "mesh", o.locs["asset"])
+            if o.get("material") is not None:
+                self.plugin("material", o["material"], o.locs["material"])
+            if o.get("sign") is not None or o.get("plate") is not None:
+                self.fonts = True
+            for d in o.get("decals") or []:
+                if d.get("image") is not None:
+                    self.image(str(d["image"]), d.locs["image"])
+                else:
+                    self.fonts = True
+
+    def check_fonts(self, loc: Loc) -> None:
+        from ..scene import raster
+
+        for name in ("DejaVuSans-Bold", "DejaVuSans"):
+            try:
+                path = raster.font_path(name)
+            except (SynthgenError, OSError) as e:
+                self.fail(loc, "the fonts of generated signs and plates", e)
+            if not os.path.isfile(path):
+                self.fail(loc, "the fonts of generated signs and plates",
+                          SynthgenError(f"{path} not found (Debian package fonts-dejavu-core)"))
+
+
+def check_inputs(sc: Scenario) -> Dict[str, int]:
+    """Loads every input of ``sc`` once; SceneFileError at the YAML entry of the first
+    that cannot be used. Returns counts of what was checked."""
+    c = _Checker(sc)
+    spec = sc.spec
+    c.lights(spec["lights"], spec.locs.get("lights", spec.loc))
+    ground = spec["ground"]
+    if ground["enabled"]:
+        c.plugin("material", ground["material"], ground.locs.get("material", ground.loc))
+    c.objects(spec["objects"])
+    if c.fonts:
+        c.check_fonts(spec.locs.get("objects", spec.loc))
+    kinds: Dict[str, int] = {}
+    for kind, _ in c.seen:
+        kinds[kind] = kinds.get(kind, 0) + 1
+    return kinds

@@ -1,0 +1,96 @@
+"""Bad input is refused before anything renders: every file a scenario names is loaded once
+(by `synthgen validate` and at the start of `synthgen run`) and a broken one is reported at
+its YAML line with what is wrong; constant materials and lights are created once too; a run
+whose frames all fail the same way stops early. Library warnings stay off stderr."""
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+from synthgen import SceneFileError, SynthgenError, cli
+from synthgen import run as runner
+from synthgen.scenario import check_inputs, load_scenario
+
+KENNEY = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "assets", "kenney", "vehicle-truck-red.glb")
+
+
+def scenario(tmp_path, obj, extra=""):
+    p = tmp_path / "s.yaml"
+    p.write_text(f"""
+resolution: [32, 24]
+objects:
+  - {obj}
+render: {{spp: 1, max_depth: 1}}
+{extra}""")
+    return str(p)
+
+
+def error_of(path):
+    sc = load_scenario(path)
+    with pytest.raises(SceneFileError) as e:
+        check_inputs(sc)
+    return e.value
+
+
+def test_truncated_glb_is_named_with_its_line(tmp_path):
+    if not os.path.exists(KENNEY):
+        pytest.skip("../shared is absent")
+    with open(KENNEY, "rb") as f:
+        (tmp_path / "car.glb").write_bytes(f.read()[:3000])
+    e = error_of(scenario(tmp_path, "{class: car, mesh: car.glb}"))
+    assert (e.line, e.key_path) == (4, "objects[0].mesh") and "truncated" in str(e) and "3000" in str(e), str(e)
+
+
+@pytest.mark.parametrize("coord, words", [("nan", "NaN"), ("1e39", "beyond the float range")])
+def test_non_finite_obj_coordinates(tmp_path, coord, words):
+    (tmp_path / "m.obj").write_text(f"v 0 0 0\nv 1 0 0\nv {coord} 1 0\nf 1 2 3\n")
+    e = error_of(scenario(tmp_path, "{class: m, mesh: m.obj}"))
+    assert "line 3" in str(e) and words in str(e), str(e)
+
+
+def test_corrupt_images_are_named_and_libraries_stay_quiet(tmp_path, capfd):
+    from synthgen.outputs.files import write_srgb_png
+
+    good = str(tmp_path / "good.png")
+    write_srgb_png(good, np.full((16, 16, 3), 0.5))
+    (tmp_path / "bad.png").write_bytes(open(good, "rb").read()[:60])
+    (tmp_path / "bad.jpg").write_bytes(b"\xff\xd8\xff\xe0" + bytes(range(256)))
+    for name in ("bad.png", "bad.jpg"):
+        e = error_of(scenario(tmp_path, f"{{class: b, primitive: box, decals: [{{image: {name}}}]}}"))
+        assert e.key_path == "objects[0].decals[0].image" and "cannot use this image" in str(e), str(e)
+    err = capfd.readouterr().err
+    assert "libpng" not in err and "JPEG" not in err, err
+
+
+def test_impossible_material_is_refused_at_its_entry(tmp_path):
+    e = error_of(scenario(tmp_path, "{class: g, primitive: sphere, material: {type: dielectric, ior: 1.0}}"))
+    assert e.key_path == "objects[0].material" and "must differ" in str(e), str(e)
+
+
+def test_run_stops_before_rendering_on_a_broken_input(tmp_path):
+    (tmp_path / "m.obj").write_text("v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n")
+    path = scenario(tmp_path, "{class: m, mesh: m.obj}")
+    out = str(tmp_path / "ds")
+    with pytest.raises(SceneFileError, match="line 2"):
+        runner.run(path, out, count=50, progress=False)
+    assert not os.path.exists(os.path.join(out, "meta"))
+    assert cli.main(["validate", path]) == 2
+
+
+def test_validate_reports_what_it_loaded(tmp_path, capsys):
+    if not os.path.exists(KENNEY):
+        pytest.skip("../shared is absent")
+    assert cli.main(["validate", scenario(tmp_path, f"{{class: car, mesh: {os.path.abspath(KENNEY)}}}")]) == 0
+    assert "loaded 1 mesh" in capsys.readouterr().out
+
+
+def test_a_run_whose_frames_all_fail_alike_stops_early(tmp_path, monkeypatch):
+    from synthgen.frame import FrameRenderer
+
+    def broken(self, frame):
+        raise SynthgenError("the same problem every time")
+
+    monkeypatch.setattr(FrameRenderer, "render", broken)
+    s = runner.run(scenario(tmp_path, "{class: b, primitive: box}"), str(tmp_path / "ds"), count=40, progress=False)
+    assert len(s["failures"]) == runner.ABORT_AFTER and "stopped after 3 frames" in s.text()
