@@ -1,6 +1,10 @@
 #include "film/film.h"
 
 #include <limits>
+#include <new>
+#include <string>
+
+#include "core/error.h"
 
 namespace sg {
 
@@ -9,14 +13,20 @@ void Film::allocate(uint32_t w, uint32_t h) {
   height = h;
   size_t n = size_t(w) * h;
   constexpr float inf = std::numeric_limits<float>::infinity();
-  rgb.assign(3 * n, 0.f);
-  alpha.assign(n, 0.f);
-  depth.assign(n, inf);
-  distance.assign(n, inf);
-  normal.assign(3 * n, 0.f);
-  albedo.assign(3 * n, 0.f);
-  instance_id.assign(n, 0u);
-  class_id.assign(n, 0u);
+  try {
+    rgb.assign(3 * n, 0.f);
+    alpha.assign(n, 0.f);
+    depth.assign(n, inf);
+    distance.assign(n, inf);
+    normal.assign(3 * n, 0.f);
+    albedo.assign(3 * n, 0.f);
+    instance_id.assign(n, 0u);
+    class_id.assign(n, 0u);
+  } catch (const std::bad_alloc&) {
+    *this = Film();
+    throw Error("render: cannot allocate the buffers of a " + std::to_string(w) + " x " + std::to_string(h) +
+                " image (" + std::to_string(n * 56 / (1 << 20)) + " MiB): not enough memory");
+  }
 }
 
 }  // namespace sg

@@ -21,6 +21,7 @@ from ..outputs.meta import completed_frames, frame_status
 from ..outputs.registry import frame_name
 from .manifest import build_manifest, check_manifest, write_manifest
 from ..scenario import check_inputs, load_scenario
+from ..scenario.load import check_memory
 from .executors import DaskExecutor, LocalExecutor
 from .task import render_task
 
@@ -81,6 +82,10 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     sc = load_scenario(scenario_path)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once
     n = int(count) if count is not None else sc.count
+    if scheduler is None:  # local workers share this machine's memory
+        why = check_memory(*sc.resolution, workers=workers)
+        if why:
+            raise SynthgenError(f"{scenario_path}: {why}; use fewer --workers or a smaller resolution")
     frames = list(only) if only is not None else list(range(n))
     os.makedirs(out_dir, exist_ok=True)
     complete, broken = frame_status(out_dir)

@@ -10,13 +10,16 @@ import json
 import os
 from typing import Any, List, Optional, Tuple
 
+import numpy as np
+
 from ..schema import distributions as D
+from ..schema import limits
 from ..schema.errors import Loc, SceneFileError, ValidationContext
 from ..schema.fields import Validated
 from ..schema.yaml_io import parse_yaml
 from .schema import SCENARIO_SCHEMA
 
-__all__ = ["Scenario", "load_scenario", "parse_scenario"]
+__all__ = ["Scenario", "load_scenario", "parse_scenario", "check_memory"]
 
 
 class Scenario:
@@ -67,7 +70,39 @@ def _check_assets(tree: Any, loc: Loc, ctx: ValidationContext, kind: str) -> Non
             ctx.error(loc, f"asset '{v}' is a {e['kind']}, not a {kind}")
 
 
+def _largest(v: Any) -> float:
+    """The largest value a count may take (a constant, or a distribution's upper bound)."""
+    if isinstance(v, D.Choice):
+        return max(_largest(o) for o in v.options)
+    if isinstance(v, (D.IntUniform, D.Uniform)):
+        return float(np.max(v.hi))
+    if isinstance(v, D.Distribution):
+        return float("inf")
+    return float(v)
+
+
+def check_memory(width: int, height: int, workers: int = 1) -> Optional[str]:
+    """Why ``workers`` frames of ``width`` x ``height`` at once do not fit in this machine's
+    available memory, or None."""
+    need = limits.frame_memory(width, height) * max(1, workers)
+    have = limits.available_memory()
+    if have is not None and need > have:
+        per = f" x {workers} workers" if workers > 1 else ""
+        return (f"{width} x {height} pixels need about {limits.fmt_bytes(need)} of memory{per} (about "
+                f"{limits.BYTES_PER_PIXEL} bytes per pixel: render buffers, amodal masks, image conversions); "
+                f"this machine has {limits.fmt_bytes(have)} available")
+    return None
+
+
 def _check(spec: Validated, ctx: ValidationContext) -> None:
+    n = sum(_largest(o["count"]) for o in spec["objects"])
+    if n > limits.MAX_OBJECTS_PER_FRAME:
+        ctx.error(spec.locs.get("objects", spec.loc), f"up to {n:g} object instances per frame (the entries' largest "
+                                                      f"counts); at most {limits.MAX_OBJECTS_PER_FRAME:,}")
+    w, h = spec["resolution"]
+    why = check_memory(w, h)
+    if why:
+        ctx.error(spec.locs.get("resolution", spec.loc), why)
     for i, o in enumerate(spec["objects"]):
         if o.get("forward") and o.get("up") and o["forward"][1] == o["up"][1]:
             ctx.error(o.locs["up"], f"forward ({o['forward']}) and up ({o['up']}) must be different axes")

@@ -48,6 +48,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 from .._core import PinholeCamera, Scene, TextureRef
+from ..schema import limits
 from ..schema.errors import Loc, ValidationContext, suggest
 from ..schema.fields import (EMPTY, Choice, FilePath, Integer, ListOf, MapOf, MaterialName, Matrix4, Number, Record,
                              String, TextureName, Validated, Vector)
@@ -257,6 +258,11 @@ def _primitive_mesh(obj: Validated) -> Tuple[tuple, Dict[str, np.ndarray], np.nd
 
 def camera_from_spec(cam: Validated, ctx: ValidationContext) -> PinholeCamera:
     """PinholeCamera of a validated ``camera`` record (through the camera plugin)."""
+    w, h = cam["width"], cam["height"]
+    need, have = w * h * limits.BYTES_PER_PIXEL, limits.available_memory()
+    if have is not None and need > have:
+        ctx.error(cam.loc, f"{w} x {h} pixels need about {limits.fmt_bytes(need)} of memory to render and write; "
+                           f"this machine has {limits.fmt_bytes(have)} available")
     params = given_params(cam, skip=("look_at",))
     if cam.get("look_at") is not None:
         la = cam["look_at"]

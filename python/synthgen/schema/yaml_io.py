@@ -14,6 +14,7 @@ from typing import Any, Dict, List, Optional, Tuple
 import yaml
 
 from .errors import SceneFileError, _hashable
+from .limits import MAX_YAML_VALUES, expanded_size
 
 __all__ = ["MarkedDict", "MarkedList", "read_yaml", "parse_yaml"]
 
@@ -112,7 +113,7 @@ def parse_yaml(text: str, source: str = "<string>") -> Any:
     """Parses YAML text like :func:`read_yaml`."""
     loader = _MarkedLoader(text)
     try:
-        return loader.get_single_data()
+        data = loader.get_single_data()
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         reason = " ".join(str(x) for x in (e.context, e.problem) if x)
@@ -124,3 +125,8 @@ def parse_yaml(text: str, source: str = "<string>") -> Any:
         raise SceneFileError(source, None, None, "", f"invalid YAML: {e}") from None
     finally:
         loader.dispose()
+    n = expanded_size(data)
+    if n > MAX_YAML_VALUES:
+        raise SceneFileError(source, None, None, "", f"the document expands to more than {MAX_YAML_VALUES:,} values "
+                                                     f"through its aliases (*name): refused (an alias bomb?)")
+    return data
