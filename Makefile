@@ -52,4 +52,4 @@ build: $(BUILD)/CMakeCache.txt
 install: build .stamp-install
 
 clean:
-	rm -rf $(BUILD) .stamp-install python/synthgen/_core*.so
+	rm -rf $(BUILD) .stamp-install python/synthgen/_core*.so python/synthgen/libsynthgen_oiio.so python/synthgen/synthgen-reader

@@ -37,8 +37,9 @@ ROOT = Path(__file__).resolve().parents[1]
 #: The C++ folders (one concern each) and what they hold. A test checks that this lists
 #: exactly the folders of cpp/.
 CPP_FOLDERS = {
-    "core": "math (Vec3f, Frame, Transform), rng (counter-based sampler), sampling, noise, params and the "
-            "plugin registry (`plugin.h`: parameters declared once)",
+    "core": "math (Vec3f, Frame, Transform), rng (counter-based sampler), sampling, noise, params, the "
+            "plugin registry (`plugin.h`: parameters declared once) and `isolate.h` (untrusted files read in "
+            "another process)",
     "geometry": "TriangleMesh (validation) and Accel -- the only files including Embree",
     "material": "the Material interface and one file per material plugin",
     "texture": "the Texture interface, one file per texture plugin; mip maps, the image cache",
@@ -49,6 +50,8 @@ CPP_FOLDERS = {
     "io": "each third-party API in one file: OpenImageIO (a lazily loaded plugin), assimp",
     "api": "Scene, the integration API; its XML persistence (`scene_xml.cpp`, pugixml) and file import",
     "bindings": "the pybind11 module `synthgen._core`",
+    "reader": "`synthgen-reader`, the executable that decodes one untrusted file (mesh, image) with time and "
+              "memory limits",
 }
 
 #: Top-level folders of the repository besides cpp/ and python/.
@@ -59,7 +62,9 @@ OTHER_FOLDERS = {
     "docs/": "`architecture.md` (design, plugins, how to add things), `python_api.md`, `scene_file.md`, "
              "`scenarios.md`, `wear.md`, `benchmarks.md`",
     "assets_manifest/": "which assets exist, where they come from, licences, checksums",
-    "tools/": "generators of the docs (`gen_docs.py`, `gen_api_doc.py`) and `dataset_hash.py`",
+    "fuzz/": "libFuzzer targets of every loader, their seed and regression corpora (`corpus/`), the YAML "
+             "mutation fuzzer (`fuzz_yaml.py`); `bench/fuzz.sh` runs them",
+    "tools/": "generators of the docs (`gen_docs.py`, `gen_api_doc.py`), `dataset_hash.py`, `make_fuzz_seeds.py`",
 }
 
 

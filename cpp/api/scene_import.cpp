@@ -19,7 +19,7 @@ uint32_t Scene::add_embedded_texture(std::shared_ptr<ImageData> pixels, const Co
 }
 
 ImportResult Scene::load_mesh_file(const std::string& path) {
-  ImportedModel model = import_mesh_file(path);
+  ImportedModel model = import_mesh_file_isolated(path);
   ImportResult result;
   result.removed_degenerate = model.removed_degenerate;
   std::vector<int32_t> remap(model.materials.size(), -1);

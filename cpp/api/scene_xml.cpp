@@ -105,7 +105,8 @@ uint64_t append_blob(std::ofstream& bin, const std::vector<T>& v) {
 
 template <class T>
 void read_blob(const std::vector<char>& bin, uint64_t off, size_t count, std::vector<T>* out, const std::string& ctx) {
-  if (off + count * sizeof(T) > bin.size()) throw Error(ctx + ": binary data is truncated");
+  // Written so that no hostile offset or count can overflow the bound.
+  if (off > bin.size() || count > (bin.size() - off) / sizeof(T)) throw Error(ctx + ": binary data is truncated");
   out->resize(count);
   if (count) std::memcpy(out->data(), bin.data() + off, count * sizeof(T));
 }
@@ -209,13 +210,33 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
   pugi::xml_node root = doc.child("synthgen_scene");
   if (!root) throw FileError(path, "not a synthgen scene file (no <synthgen_scene> root)");
   std::filesystem::path bin_path = std::filesystem::path(path).parent_path() / root.attribute("bin").as_string();
+  std::error_code ec;
+  if (!root.attribute("bin") || !std::filesystem::is_regular_file(bin_path, ec))
+    throw FileError(bin_path.string(), "the binary sidecar named by the scene file's 'bin' attribute is not a file");
+  uint64_t bin_size = std::filesystem::file_size(bin_path, ec);
   std::ifstream bin_in(bin_path, std::ios::binary);
-  if (!bin_in) throw FileError(bin_path.string(), "cannot open binary sidecar");
-  std::vector<char> bin((std::istreambuf_iterator<char>(bin_in)), std::istreambuf_iterator<char>());
+  if (ec || !bin_in) throw FileError(bin_path.string(), "cannot open binary sidecar");
+  std::vector<char> bin;
+  try {
+    bin.resize(size_t(bin_size));
+  } catch (const std::exception&) {
+    throw FileError(bin_path.string(), "binary sidecar of " + std::to_string(bin_size) + " bytes does not fit in memory");
+  }
+  if (bin_size && !bin_in.read(bin.data(), std::streamsize(bin_size)))
+    throw FileError(bin_path.string(), "cannot read binary sidecar");
 
   auto scene = std::make_unique<Scene>();
   Scene& s = *scene;
+  // Slot ids are stable handles (never reused), so a file may have holes, but not more than
+  // k_max_slots of a kind: a hostile id must not make the loader allocate without bound.
+  constexpr uint64_t k_max_slots = uint64_t(1) << 24;
+  auto check_slots = [&](uint64_t n, const char* what) {
+    if (n > k_max_slots)
+      throw Error(std::string(what) + " " + std::to_string(n) + " is out of range (at most " +
+                  std::to_string(k_max_slots) + " slots of a kind)");
+  };
   auto pad = [&](auto& vec, uint64_t id) {
+    check_slots(id, "id");
     if (id < vec.size()) throw Error("duplicate id " + std::to_string(id));
     vec.resize(id);
   };
@@ -260,6 +281,7 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
       m.name = n.attribute("name").as_string();
       size_t nv = n.attribute("vertices").as_ullong(), nt = n.attribute("triangles").as_ullong();
       std::string ctx = "mesh " + std::to_string(id);
+      if (nt > bin.size()) throw Error(ctx + ": binary data is truncated");  // before 3 * nt can wrap
       read_blob(bin, n.attribute("positions").as_ullong(), nv, &m.positions, ctx);
       read_blob(bin, n.attribute("indices").as_ullong(), 3 * nt, &m.indices, ctx);
       if (n.attribute("normals")) read_blob(bin, n.attribute("normals").as_ullong(), nv, &m.normals, ctx);
@@ -309,6 +331,8 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
       s.set_camera(c);
     }
     pugi::xml_node counts = root.child("slots");
+    for (const char* kind : {"meshes", "textures", "materials", "instances", "lights"})
+      check_slots(counts.attribute(kind).as_ullong(), "slot count");
     s.restore_slot_counts(counts.attribute("meshes").as_ullong(), counts.attribute("textures").as_ullong(),
                           counts.attribute("materials").as_ullong(), counts.attribute("instances").as_ullong(),
                           counts.attribute("lights").as_ullong());

@@ -211,6 +211,29 @@ PYBIND11_MODULE(_core, m) {
         "of about 0.2 s: OpenImageIO and its format libraries). Worker processes and benchmarks call it\n"
         "at start-up. Raises SynthgenError when the plugin cannot be loaded.");
 
+  m.def(
+      "read_image",
+      [](const std::string& path, const std::string& color_space) {
+        ColorSpace space = color_space == "auto"     ? ColorSpace::Auto
+                           : color_space == "srgb"   ? ColorSpace::SRGB
+                           : color_space == "linear" ? ColorSpace::Linear
+                                                     : throw Error("read_image: color_space must be 'auto', 'srgb' "
+                                                                   "or 'linear', got '" + color_space + "'");
+        ImageData img;
+        {
+          py::gil_scoped_release release;
+          img = load_image(path, space);
+        }
+        py::array_t<float> out({py::ssize_t(img.height), py::ssize_t(img.width), py::ssize_t(img.channels)});
+        std::memcpy(out.mutable_data(), img.pixels.data(), img.pixels.size() * sizeof(float));
+        return out;
+      },
+      py::arg("path"), py::arg("color_space") = "auto",
+      "An image file as a float32 H x W x C array of linear values: 8- and 16-bit files (PNG, JPEG,\n"
+      "TIFF) are sRGB-decoded unless color_space='linear'; float files (EXR, HDR) are kept. The file\n"
+      "is decoded by synthgen-reader, a separate process with time and memory limits, so a corrupt\n"
+      "or hostile file raises FileError naming it instead of crashing the caller.");
+
   static py::exception<Error> base_exc(m, "SynthgenError", PyExc_ValueError);
   static py::exception<FileError> file_exc(m, "FileError", base_exc.ptr());
   py::register_exception_translator([](std::exception_ptr p) {

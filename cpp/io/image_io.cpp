@@ -89,6 +89,9 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
     return false;
   }
   img->pixels.resize(size_t(img->width) * img->height * img->channels);
+  // One thread: synthgen parallelizes across frames, and a reader in a forked child
+  // (core/isolate.h) has no pool threads to hand work to.
+  in->threads(1);
   if (!in->read_image(0, 0, 0, img->channels, OIIO::TypeDesc::FLOAT, img->pixels.data())) {
     *error = "cannot decode image (" + one_line(in->geterror()) + ")";
     return false;
@@ -130,6 +133,9 @@ bool load(const char* path, int space, ImageData* img, std::string* error) {
         }
     }
     return true;
+  } catch (const std::bad_alloc&) {
+    *error = "out of memory while decoding the image";
+    return false;
   } catch (const std::exception& e) {
     *error = e.what();
     return false;
@@ -153,6 +159,9 @@ bool load_memory(const void* data, size_t size, const char* hint, ImageData* img
     bool is_float;
     int alpha;
     return read_all(in.get(), img, &is_float, &alpha, error);
+  } catch (const std::bad_alloc&) {
+    *error = "out of memory while decoding the image";
+    return false;
   } catch (const std::exception& e) {
     *error = e.what();
     return false;
@@ -178,6 +187,9 @@ bool save(const char* path, const ImageData* image, int bits, std::string* error
     }
     out->close();
     return true;
+  } catch (const std::bad_alloc&) {
+    *error = "out of memory while decoding the image";
+    return false;
   } catch (const std::exception& e) {
     *error = e.what();
     return false;

@@ -24,7 +24,22 @@ struct ImageData {
 /// Reads an image. With ColorSpace::Auto, 8/16-bit integer formats (PNG, JPEG, TIFF)
 /// are treated as sRGB-encoded and decoded to linear; float formats (EXR, HDR) as linear.
 /// Throws sg::FileError naming the file on failure.
+///
+/// The decoding runs in the synthgen-reader process (core/isolate.h) with time and memory
+/// limits: a file that crashes or hangs a format library becomes a FileError, not a dead run.
 ImageData load_image(const std::string& path, ColorSpace space);
+
+/// load_image in this process (what synthgen-reader runs; fuzz targets use it directly).
+ImageData load_image_in_process(const std::string& path, ColorSpace space);
+/// load_image_in_process's result as the bytes synthgen-reader sends.
+std::vector<char> load_image_bytes(const std::string& path, ColorSpace space);
+
+class Writer;
+class Reader;
+/// An image to and from the bytes of an isolated reader (core/isolate.h); reading checks
+/// that the sizes agree and throws FileError(what) otherwise.
+void write_image_data(Writer& w, const ImageData& image);
+ImageData read_image_data(Reader& r, const std::string& what);
 
 /// Decodes an image held in memory (e.g. embedded in a GLB file), without any colour
 /// conversion. `format_hint` is a file extension such as "png". Throws sg::FileError

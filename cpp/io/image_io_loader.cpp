@@ -5,6 +5,7 @@
 #include <mutex>
 
 #include "core/error.h"
+#include "core/isolate.h"
 #include "io/image_io.h"
 
 namespace sg {
@@ -53,10 +54,45 @@ const ImageIoApi& api() {
 
 void load_image_plugin() { api(); }
 
-ImageData load_image(const std::string& path, ColorSpace space) {
+ImageData load_image_in_process(const std::string& path, ColorSpace space) {
   ImageData img;
   std::string err;
   if (!api().load(path.c_str(), int(space), &img, &err)) throw FileError(path, err);
+  return img;
+}
+
+void write_image_data(Writer& w, const ImageData& image) {
+  w.pod(int32_t(image.width));
+  w.pod(int32_t(image.height));
+  w.pod(int32_t(image.channels));
+  w.vec(image.pixels);
+}
+
+ImageData read_image_data(Reader& r, const std::string& what) {
+  ImageData img;
+  img.width = r.pod<int32_t>();
+  img.height = r.pod<int32_t>();
+  img.channels = r.pod<int32_t>();
+  img.pixels = r.vec<float>();
+  if (img.width < 0 || img.height < 0 || img.channels < 0 ||
+      img.pixels.size() != size_t(img.width) * size_t(img.height) * size_t(img.channels))
+    throw FileError(what, "malformed image from the isolated reader");
+  return img;
+}
+
+std::vector<char> load_image_bytes(const std::string& path, ColorSpace space) {
+  Writer w;
+  write_image_data(w, load_image_in_process(path, space));
+  return std::move(w.bytes);
+}
+
+ImageData load_image(const std::string& path, ColorSpace space) {
+  const char* names[] = {"auto", "srgb", "linear"};
+  Bytes bytes =
+      read_isolated(path, {"image", path, names[int(space)]}, [&] { return load_image_bytes(path, space); });
+  Reader r(bytes, path);
+  ImageData img = read_image_data(r, path);
+  if (!r.done()) throw FileError(path, "malformed image from the isolated reader (trailing data)");
   return img;
 }
 

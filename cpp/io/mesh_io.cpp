@@ -1,5 +1,7 @@
 #include "io/mesh_io.h"
 
+#include "core/isolate.h"
+
 #include <assimp/Importer.hpp>
 #include <assimp/GltfMaterial.h>
 #include <assimp/material.h>
@@ -10,6 +12,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <vector>
+#include <algorithm>
 
 #include "core/error.h"
 
@@ -67,6 +71,108 @@ static void check_obj_vertices(const std::string& path) {
   }
 }
 
+// assimp 5.2's PLY reader loops forever on some malformed headers (a NUL byte in the
+// "format" line, no end_header) and reads element counts without comparing them with the
+// file size. A PLY file's header is therefore checked here first: printable ASCII lines, a
+// known format, an end_header within the first 64 KiB, and element counts the file's bytes
+// can hold (at least 2 bytes per ASCII value, the property sizes for binary ones).
+static void check_ply_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return;  // reported by the importer
+  char magic[4] = {0};
+  in.read(magic, 4);
+  std::string ext = fs::path(path).extension().string();
+  for (auto& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  bool is_ply = in.gcount() >= 3 && magic[0] == 'p' && magic[1] == 'l' && magic[2] == 'y';
+  if (!is_ply && (ext != ".ply" || in.gcount() == 0)) return;  // an empty file is diagnosed later
+  if (!is_ply) throw FileError(path, "not a PLY file (it does not start with the line 'ply')");
+  in.seekg(0);
+  std::string head(64 * 1024, '\0');
+  in.read(&head[0], std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  std::error_code ec;
+  uint64_t size = fs::file_size(path, ec);
+  size_t pos = 0, line_no = 0;
+  std::string format;
+  bool ended = false;
+  // (count, bytes per element) for every element, to compare with the data's size.
+  std::vector<std::pair<uint64_t, uint64_t>> elements;
+  auto fail = [&](const std::string& why) { throw FileError(path, "PLY header line " + std::to_string(line_no) + ": " + why); };
+  while (pos < head.size()) {
+    size_t eol = head.find('\n', pos);
+    if (eol == std::string::npos) break;
+    std::string line = head.substr(pos, eol - pos);
+    pos = eol + 1;
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    for (char c : line)
+      if (static_cast<unsigned char>(c) < 32 && c != '\t') fail("contains a control byte (a binary or corrupt header)");
+    std::vector<std::string> w;
+    {
+      size_t i = 0;
+      while (i < line.size()) {
+        size_t j = line.find_first_of(" \t", i);
+        if (j == std::string::npos) j = line.size();
+        if (j > i) w.push_back(line.substr(i, j - i));
+        i = j + 1;
+      }
+    }
+    if (line_no == 1) {
+      if (w.size() != 1 || w[0] != "ply") fail("the first line must be 'ply'");
+      continue;
+    }
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "end_header") {
+      ended = true;
+      break;
+    }
+    if (w[0] == "format") {
+      if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+        fail("unknown format (expected 'format ascii|binary_little_endian|binary_big_endian 1.0')");
+      format = w[1];
+    } else if (w[0] == "element") {
+      if (w.size() != 3 || w[2].empty() || w[2].size() > 19 || w[2].find_first_not_of("0123456789") != std::string::npos)
+        fail("expected 'element NAME COUNT'");
+      elements.emplace_back(std::stoull(w[2]), 0);
+    } else if (w[0] == "property") {
+      if (elements.empty()) fail("a property before any element");
+      static const std::pair<const char*, int> k_types[] = {
+          {"char", 1}, {"uchar", 1}, {"int8", 1}, {"uint8", 1}, {"short", 2}, {"ushort", 2}, {"int16", 2},
+          {"uint16", 2}, {"int", 4}, {"uint", 4}, {"int32", 4}, {"uint32", 4}, {"float", 4}, {"float32", 4},
+          {"double", 8}, {"float64", 8}};
+      auto type_size = [&](const std::string& t) {
+        for (const auto& k : k_types)
+          if (t == k.first) return k.second;
+        fail("unknown property type '" + t + "'");
+        return 0;
+      };
+      // A list stores at least its count; a scalar its size.
+      if (w.size() >= 2 && w[1] == "list") {
+        if (w.size() != 5) fail("expected 'property list COUNT_TYPE ITEM_TYPE NAME'");
+        type_size(w[3]);
+        elements.back().second += uint64_t(type_size(w[2]));
+      } else {
+        if (w.size() != 3) fail("expected 'property TYPE NAME'");
+        elements.back().second += uint64_t(type_size(w[1]));
+      }
+    }  // other lines (free text some exporters write) are left to the reader
+  }
+  if (!ended) throw FileError(path, "PLY header has no end_header line within its first 64 KiB");
+  if (format.empty()) throw FileError(path, "PLY header has no format line");
+  uint64_t data = size > pos ? size - pos : 0;
+  // Lower bounds on the bytes an element needs: an ASCII element with properties holds at
+  // least one value, written as a digit and a separator.
+  long double need = 0;
+  for (const auto& e : elements) {
+    uint64_t per = format == "ascii" ? (e.second ? 2 : 0) : e.second;
+    need += (long double)e.first * (long double)per;
+  }
+  if (need > (long double)data)
+    throw FileError(path, "PLY header declares more elements than the file holds (at least " +
+                              std::to_string((unsigned long long)std::min<long double>(need, 1e19L)) + " bytes of data, the file has " +
+                              std::to_string(data) + "): truncated or corrupt");
+}
+
 /// Why assimp found no reader, when the file's own header tells: a glTF binary whose
 /// declared length exceeds the file (truncated), an empty file; "" when nothing is known.
 static std::string diagnose_unreadable(const std::string& path) {
@@ -93,6 +199,7 @@ ImportedModel import_mesh_file(const std::string& path) {
   if (!fs::exists(path, ec)) throw FileError(path, "file not found");
   if (fs::is_directory(path, ec)) throw FileError(path, "is a directory, not a mesh file");
   check_obj_vertices(path);
+  check_ply_header(path);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene = importer.ReadFile(
@@ -241,6 +348,95 @@ ImportedModel import_mesh_file(const std::string& path) {
   for (int32_t& id : model.mesh.material_ids)
     if (id < 0 || size_t(id) >= model.materials.size()) id = -1;
   return model;
+}
+
+// Isolated import ----------------------------------------------------------------------
+
+namespace {
+
+void put(Writer& w, const ImportedTexture& t) {
+  w.str(t.path);
+  w.pod(t.embedded);
+  write_image_data(w, t.pixels);
+}
+
+ImportedTexture get_texture(Reader& r, const std::string& path) {
+  ImportedTexture t;
+  t.path = r.str();
+  t.embedded = r.pod<bool>();
+  t.pixels = read_image_data(r, path);
+  return t;
+}
+
+}  // namespace
+
+std::vector<char> import_mesh_file_bytes(const std::string& path) {
+  ImportedModel m = import_mesh_file(path);
+  Writer w;
+  w.str(m.mesh.name);
+  w.vec(m.mesh.positions);
+  w.vec(m.mesh.normals);
+  w.vec(m.mesh.uvs);
+  w.vec(m.mesh.indices);
+  w.vec(m.mesh.material_ids);
+  w.pod(uint64_t(m.removed_degenerate));
+  w.pod(uint64_t(m.materials.size()));
+  for (const ImportedMaterial& im : m.materials) {
+    w.str(im.name);
+    w.pod(im.base_color);
+    w.pod(im.emission);
+    w.str(im.texture_path);
+    w.pod(im.has_embedded_texture);
+    write_image_data(w, im.embedded_texture);
+    for (float f : {im.metallic, im.roughness, im.specular, im.transmission, im.clearcoat, im.clearcoat_roughness,
+                    im.ior, im.emission_strength, im.alpha, im.alpha_cutoff, im.normal_scale})
+      w.pod(f);
+    w.str(im.alpha_mode);
+    put(w, im.metallic_roughness);
+    put(w, im.normal);
+    put(w, im.emissive);
+    put(w, im.opacity);
+  }
+  return std::move(w.bytes);
+}
+
+ImportedModel import_mesh_file_isolated(const std::string& path) {
+  Bytes bytes = read_isolated(path, {"mesh", path}, [&] { return import_mesh_file_bytes(path); });
+  Reader r(bytes, path);
+  ImportedModel m;
+  m.mesh.name = r.str();
+  m.mesh.positions = r.vec<Vec3f>();
+  m.mesh.normals = r.vec<Vec3f>();
+  m.mesh.uvs = r.vec<Vec2f>();
+  m.mesh.indices = r.vec<uint32_t>();
+  m.mesh.material_ids = r.vec<int32_t>();
+  m.removed_degenerate = size_t(r.pod<uint64_t>());
+  uint64_t n = r.pod<uint64_t>();
+  if (n > bytes.size()) throw FileError(path, "malformed model from the isolated reader");
+  for (uint64_t i = 0; i < n; ++i) {
+    ImportedMaterial im;
+    im.name = r.str();
+    im.base_color = r.pod<Color>();
+    im.emission = r.pod<Color>();
+    im.texture_path = r.str();
+    im.has_embedded_texture = r.pod<bool>();
+    im.embedded_texture = read_image_data(r, path);
+    for (float* f : {&im.metallic, &im.roughness, &im.specular, &im.transmission, &im.clearcoat,
+                     &im.clearcoat_roughness, &im.ior, &im.emission_strength, &im.alpha, &im.alpha_cutoff,
+                     &im.normal_scale})
+      *f = r.pod<float>();
+    im.alpha_mode = r.str();
+    im.metallic_roughness = get_texture(r, path);
+    im.normal = get_texture(r, path);
+    im.emissive = get_texture(r, path);
+    im.opacity = get_texture(r, path);
+    m.materials.push_back(std::move(im));
+  }
+  if (!r.done()) throw FileError(path, "malformed model from the isolated reader (trailing data)");
+  for (int32_t id : m.mesh.material_ids)
+    if (id < -1 || (id >= 0 && size_t(id) >= m.materials.size()))
+      throw FileError(path, "malformed model from the isolated reader (material id out of range)");
+  return m;
 }
 
 }  // namespace sg

@@ -50,4 +50,13 @@ struct ImportedModel {
 /// Throws sg::FileError naming the file and the reason.
 ImportedModel import_mesh_file(const std::string& path);
 
+/// import_mesh_file in the synthgen-reader process with time and memory limits
+/// (core/isolate.h): a crash, hang or runaway allocation inside assimp becomes an
+/// sg::FileError. What the reader sends back is checked before use. Scene::load_mesh_file
+/// reads files this way.
+ImportedModel import_mesh_file_isolated(const std::string& path);
+
+/// import_mesh_file's result as the bytes synthgen-reader sends.
+std::vector<char> import_mesh_file_bytes(const std::string& path);
+
 }  // namespace sg

@@ -30,6 +30,7 @@ from ._core import (  # noqa: F401
     plugin_info,
     plugin_kinds,
     plugin_names,
+    read_image,
 )
 from .schema.errors import SceneFileError  # noqa: F401
 from .scene import primitives, wear  # noqa: F401
@@ -51,5 +52,6 @@ __all__ = [
     "plugin_kinds",
     "plugin_names",
     "primitives",
+    "read_image",
     "wear",
 ]

@@ -82,8 +82,9 @@ TEST(registry, declarations_are_consistent) {
         EXPECT_FALSE(p.doc.empty()) << what << ": '" << p.name << "' has no doc";
         EXPECT_FALSE(p.required && p.has_default) << what << ": '" << p.name << "' is required and has a default";
         // A declared default passes the declaration's own checks.
-        if (p.has_default)
+        if (p.has_default) {
           EXPECT_NO_THROW(check_param_value(p, p.default_value)) << what << ": default of '" << p.name << "'";
+        }
       }
       auto declared = [&](const std::string& k) { return info.find(k) != nullptr; };
       for (const auto& [a, b] : info.exclusive)

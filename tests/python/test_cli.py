@@ -121,7 +121,7 @@ def test_bad_yaml_exits_2_with_location(tmp_path):
 
 
 @pytest.mark.parametrize("args, fragment", [
-    (["render", "{tmp}/absent.yaml"], "cannot read scene file"),
+    (["render", "{tmp}/absent.yaml"], "cannot read the scene file"),
     (["render", "{tmp}/tiny.yaml", "--seed", str(1 << 64)], "command line: render.seed"),
     (["demo", "--width", "70000", "-o", "{tmp}/d"], "camera.width"),
 ])

@@ -99,3 +99,25 @@ def test_signs_have_their_shape_colours_and_class_names():
     assert stop[20, 64, 0] > 0.4 and stop[20, 64, 1] < 0.1, "red octagon"
     with pytest.raises(ValueError, match="did you mean 'stop'"):
         signs.render_sign("stp")
+
+
+def test_pictogram_files_are_linear_and_read_in_isolation(tmp_path):
+    """An 8-bit PNG pictogram is sRGB-decoded (128/255 -> 0.2159 linear) with its alpha kept, as
+    every texture; a corrupt file raises FileError naming it (synthgen-reader decodes it)."""
+    import synthgen as sg
+    from synthgen.outputs.files import write_srgb_png
+
+    rgb = np.full((4, 6, 3), 0.2158605, np.float32)
+    path = str(tmp_path / "grey.png")
+    write_srgb_png(path, rgb)
+    p = signs.load_pictogram(path, "custom_sign")
+    assert p["rgba"].shape == (4, 6, 4) and p["class_name"] == "custom_sign"
+    assert np.allclose(p["rgba"][..., :3], 0.2158605, atol=2e-3), p["rgba"][0, 0]
+    assert np.all(p["rgba"][..., 3] == 1.0)
+    assert np.array_equal(sg.read_image(path, "linear")[0, 0], np.full(3, 128 / 255, np.float32))
+    bad = tmp_path / "bad.png"
+    bad.write_bytes(b"\x89PNG\r\n\x1a\n" + b"x" * 50)
+    with pytest.raises(sg.FileError, match=f"^{bad}: "):
+        signs.load_pictogram(str(bad), "x")
+    with pytest.raises(sg.SynthgenError, match="color_space must be"):
+        sg.read_image(path, "rgb")

@@ -197,7 +197,7 @@ def test_empty_and_missing_files(tmp_path):
     e = error_of(write(tmp_path, "# nothing\n"))
     assert "empty" in str(e) and str(tmp_path) in str(e)
     e = error_of(tmp_path / "absent.yaml")
-    assert "cannot read scene file" in str(e) and "absent.yaml" in str(e)
+    assert "cannot read the scene file" in str(e) and "absent.yaml" in str(e)
     e = error_of(write(tmp_path, "- 1\n- 2\n"))
     assert "expected a mapping" in str(e) and e.line == 1
 

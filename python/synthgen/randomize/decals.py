@@ -3,12 +3,13 @@ projector in object space -- image files, generated sign pictograms or licence p
 over its material, before wear. Each decal's kind, text and size go into the metadata."""
 from __future__ import annotations
 
+import functools
 import os
 from typing import Any, Dict, List, Mapping, Tuple
 
 import numpy as np
 
-from .._core import SynthgenError
+from .._core import SynthgenError, read_image
 from ..schema.fields import REQUIRED, Choice, FilePath, ListOf, Number, Record, String
 from ..schema.random import R
 from ..scene import plates, signs, wear
@@ -28,16 +29,19 @@ DECAL = Record({
 SCHEMA = ListOf(DECAL, [], doc="decals projected onto the front, before wear")
 
 
-def image_aspect(path: str) -> float:
-    """Width / height of an image file (its header, through OpenImageIO)."""
-    import OpenImageIO as oiio
+@functools.lru_cache(maxsize=256)
+def _image_aspect(path: str, mtime_ns: int) -> float:
+    h, w = read_image(path).shape[:2]
+    return float(w) / float(max(h, 1))
 
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise SynthgenError(f"{path}: cannot read the image: {oiio.geterror()}")
-    spec = inp.spec()
-    inp.close()
-    return float(spec.width) / float(max(spec.height, 1))
+
+def image_aspect(path: str) -> float:
+    """Width / height of an image file (decoded once per file version by the isolated reader)."""
+    try:
+        mtime = os.stat(path).st_mtime_ns
+    except OSError as e:
+        raise SynthgenError(f"{path}: cannot read the image: {e.strerror}") from None
+    return _image_aspect(path, mtime)
 
 
 class Decals(Randomizer):

@@ -16,7 +16,7 @@ from ..schema import distributions as D
 from ..schema import limits
 from ..schema.errors import Loc, SceneFileError, ValidationContext
 from ..schema.fields import Validated
-from ..schema.yaml_io import parse_yaml
+from ..schema.yaml_io import parse_yaml, read_text
 from .schema import SCENARIO_SCHEMA
 
 __all__ = ["Scenario", "load_scenario", "parse_scenario", "check_memory"]
@@ -140,10 +140,6 @@ def parse_scenario(data: Any, source: str = "<scenario>", base_dir: Optional[str
 def load_scenario(path: str | os.PathLike) -> Scenario:
     """Reads and validates a scenario file; raises :class:`SceneFileError` (file:line:col)."""
     path = os.fspath(path)
-    try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
-    except OSError as e:
-        raise SceneFileError(path, None, None, "", f"cannot read the scenario: {e.strerror or e}") from e
+    text = read_text(path, what="scenario")
     data = parse_yaml(text, path)
     return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text)

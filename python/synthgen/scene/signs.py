@@ -108,13 +108,13 @@ def on_background(rgba: np.ndarray, grey: float = 0.85) -> np.ndarray:
 
 
 def load_pictogram(path: str, class_name: str) -> Dict[str, Any]:
-    """An image file (PNG with alpha, JPEG, EXR, ...) as a sign texture with `class_name`."""
-    import OpenImageIO as oiio
+    """An image file (PNG with alpha, JPEG, EXR, ...) as a sign texture with `class_name`.
 
-    buf = oiio.ImageBuf(path)
-    if buf.has_error:
-        raise ValueError(f"{path}: {buf.geterror()}")
-    px = np.asarray(buf.get_pixels(oiio.FLOAT), np.float32)
+    Colours are linear (8- and 16-bit files are sRGB-decoded; alpha is kept as stored), as
+    every texture synthgen renders; the file is decoded by the isolated reader."""
+    from .._core import read_image
+
+    px = np.asarray(read_image(path), np.float32)
     if px.ndim == 2:
         px = px[..., None]
     c = px.shape[2]

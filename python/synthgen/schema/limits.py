@@ -9,11 +9,14 @@ from __future__ import annotations
 import os
 from typing import Any, Dict, Optional
 
-__all__ = ["MAX_YAML_VALUES", "MAX_OBJECTS_PER_FRAME", "BYTES_PER_PIXEL", "expanded_size", "available_memory",
+__all__ = ["MAX_YAML_DEPTH", "MAX_YAML_VALUES", "MAX_OBJECTS_PER_FRAME", "BYTES_PER_PIXEL", "expanded_size", "available_memory",
            "frame_memory", "fmt_bytes"]
 
 #: Values (mappings, lists, scalars) a YAML document may expand to through its aliases.
 MAX_YAML_VALUES = 200_000
+#: Nesting depth of a YAML document (mappings and lists inside each other); real files
+#: nest a handful of levels, and PyYAML's composer recurses once per level.
+MAX_YAML_DEPTH = 64
 #: Object instances a scenario frame may hold (the sum of the entries' largest counts).
 MAX_OBJECTS_PER_FRAME = 10_000
 #: Peak memory of a frame per image pixel (bytes): the render buffers (colour, alpha, depth,

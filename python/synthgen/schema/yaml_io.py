@@ -14,9 +14,9 @@ from typing import Any, Dict, List, Optional, Tuple
 import yaml
 
 from .errors import SceneFileError, _hashable
-from .limits import MAX_YAML_VALUES, expanded_size
+from .limits import MAX_YAML_DEPTH, MAX_YAML_VALUES, expanded_size
 
-__all__ = ["MarkedDict", "MarkedList", "read_yaml", "parse_yaml"]
+__all__ = ["MarkedDict", "MarkedList", "read_yaml", "read_text", "parse_yaml"]
 
 class MarkedDict(dict):
     """dict from YAML that remembers 1-based (line, column) of itself, its keys and values."""
@@ -92,6 +92,31 @@ _MarkedLoader.add_implicit_resolver(
 )
 
 
+def _line_col(text: str, index: int) -> Tuple[int, int]:
+    """1-based line and column of character `index` of `text`."""
+    line = text.count("\n", 0, index) + 1
+    return line, index - (text.rfind("\n", 0, index) + 1) + 1
+
+
+def read_text(path: str | os.PathLike, source: Optional[str] = None, what: str = "scene file") -> str:
+    """A file's text, decoded as UTF-8; :class:`SceneFileError` naming the file (and, for
+    bytes that are not UTF-8, their line and column) when it cannot be read."""
+    path = os.fspath(path)
+    source = path if source is None else source
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except OSError as e:
+        raise SceneFileError(source, None, None, "", f"cannot read the {what}: {e.strerror or e}") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        good = data[:e.start].decode("utf-8")
+        line, col = _line_col(good, len(good))
+        raise SceneFileError(source, line, col, "", f"the {what} is not UTF-8 text (byte 0x{data[e.start]:02x} "
+                                                    f"at offset {e.start}: {e.reason})") from None
+
+
 def read_yaml(path: str | os.PathLike, source: Optional[str] = None) -> Any:
     """Parses a YAML file safely into MarkedDict / MarkedList / scalars.
 
@@ -100,20 +125,41 @@ def read_yaml(path: str | os.PathLike, source: Optional[str] = None) -> Any:
     """
     path = os.fspath(path)
     source = path if source is None else source
+    return parse_yaml(read_text(path, source), source)
+
+
+def _check_depth(text: str, source: str) -> None:
+    """Refuses documents nested deeper than MAX_YAML_DEPTH before they are composed (the
+    event parser is iterative; the composer is not)."""
+    depth = 0
+    loader = yaml.SafeLoader(text)
     try:
-        with open(path, "r", encoding="utf-8") as f:
-            text = f.read()
-    except (OSError, UnicodeDecodeError) as e:
-        reason = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
-        raise SceneFileError(source, None, None, "", f"cannot read scene file: {reason}") from e
-    return parse_yaml(text, source)
+        while loader.check_event():
+            ev = loader.get_event()
+            if isinstance(ev, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                depth += 1
+                if depth > MAX_YAML_DEPTH:
+                    line, col = _mark(ev.start_mark)
+                    raise SceneFileError(source, line, col, "", f"the document nests more than {MAX_YAML_DEPTH} "
+                                                                f"levels of mappings and lists: refused")
+            elif isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                depth -= 1
+    finally:
+        loader.dispose()
 
 
 def parse_yaml(text: str, source: str = "<string>") -> Any:
     """Parses YAML text like :func:`read_yaml`."""
-    loader = _MarkedLoader(text)
+    loader = None
     try:
+        _check_depth(text, source)
+        loader = _MarkedLoader(text)
         data = loader.get_single_data()
+    except yaml.reader.ReaderError as e:
+        line, col = _line_col(text, e.position) if isinstance(e.position, int) else (None, None)
+        what = f"character U+{e.character:04X}" if isinstance(e.character, int) else "a character"
+        raise SceneFileError(source, line, col, "", f"invalid YAML: {what} is not allowed in YAML text "
+                                                    f"(control characters and the like)") from None
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         reason = " ".join(str(x) for x in (e.context, e.problem) if x)
@@ -124,7 +170,8 @@ def parse_yaml(text: str, source: str = "<string>") -> Any:
     except yaml.YAMLError as e:
         raise SceneFileError(source, None, None, "", f"invalid YAML: {e}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     n = expanded_size(data)
     if n > MAX_YAML_VALUES:
         raise SceneFileError(source, None, None, "", f"the document expands to more than {MAX_YAML_VALUES:,} values "

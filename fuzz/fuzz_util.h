@@ -1,0 +1,39 @@
+// Shared by the fuzz targets: files are read in this process, a private temporary directory,
+// writing bytes to a file.
+//
+// NOTE: SYNTHGEN_NO_ISOLATION: synthgen reads untrusted files in synthgen-reader, a separate
+// process (core/isolate.h); the targets read them here instead, so that the sanitizers see
+// our code around assimp and OpenImageIO, and a loop is a libFuzzer timeout.
+#pragma once
+
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fuzz {
+
+inline const int k_in_process = setenv("SYNTHGEN_NO_ISOLATION", "1", 1);
+
+/// A directory of this process's own, created once.
+inline const std::string& temp_dir() {
+  static const std::string dir = [] {
+    std::string d = (std::filesystem::temp_directory_path() / ("synthgen-fuzz-" + std::to_string(getpid()))).string();
+    std::filesystem::create_directories(d);
+    return d;
+  }();
+  return dir;
+}
+
+inline std::string write_file(const std::string& name, const uint8_t* data, size_t size) {
+  std::string path = temp_dir() + "/" + name;
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  f.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  return path;
+}
+
+}  // namespace fuzz
