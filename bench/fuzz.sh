@@ -47,6 +47,8 @@ selected() { [ -z "$ONLY" ] || [[ " $ONLY " == *" $1 "* ]]; }
 
 report() {  # name log crashes-dir corpus-dir
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$2" | grep -o '[0-9]*$' | tail -1)
+  # A run that stopped at a crash prints no final stats: its last status line has the count.
+  [ -n "$execs" ] || execs=$(grep -oE '^#[0-9]+' "$2" | tr -d '#' | tail -1)
   crashes=$(find "$3" -type f ! -name '*.txt' 2>/dev/null | wc -l)
   for c in "$3"/*; do
     [ -f "$c" ] || continue
@@ -71,7 +73,7 @@ for bin in "$BUILD"/fuzz_*; do
   cp -n fuzz/corpus/"$name"/* "$corpus"/ 2>/dev/null
   seed_extra "$name" "$corpus"
   log="$BUILD/$name.log"
-  "$bin" "$corpus" -max_total_time="$SECONDS_PER_TARGET" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+  "$bin" "$corpus" -max_total_time="$SECONDS_PER_TARGET" -timeout=25 -rss_limit_mb=2048 -max_len=65536 \
     -print_final_stats=1 -artifact_prefix="$crashes_dir/" > "$log" 2>&1
   report "$name" "$log" "$crashes_dir" "$corpus"
 done

@@ -1,5 +1,5 @@
-// Shared by the fuzz targets: files are read in this process, a private temporary directory,
-// writing bytes to a file.
+// Shared by the fuzz targets: files are read in this process with a smaller image limit, a
+// private temporary directory, writing bytes to a file.
 //
 // NOTE: SYNTHGEN_NO_ISOLATION: synthgen reads untrusted files in synthgen-reader, a separate
 // process (core/isolate.h); the targets read them here instead, so that the sanitizers see
@@ -18,6 +18,9 @@
 namespace fuzz {
 
 inline const int k_in_process = setenv("SYNTHGEN_NO_ISOLATION", "1", 1);
+// Images of at most 4096^2 pixels (synthgen's own limit is 16384^2, 4 GiB of floats): the
+// same checks, within libFuzzer's 2 GiB memory limit.
+inline const int k_max_pixels = setenv("SYNTHGEN_MAX_IMAGE_PIXELS", "16777216", 1);
 
 /// A directory of this process's own, created once.
 inline const std::string& temp_dir() {

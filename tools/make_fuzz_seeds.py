@@ -43,7 +43,7 @@ def scene_xml(tmp: str) -> None:
     s.set_instance_material_map(i, {-1: a})
     s.add_light("sun", {"elevation": 40, "azimuth": 10})
     s.set_camera(sg.PinholeCamera.from_fov(40, 32, 24, sg.PinholeCamera.look_at([0, 2, -5], [0, 0.5, 0])))
-    path = os.path.join(tmp, "s.xml")
+    path = os.path.join(tmp, "scene.xml")  # the name fuzz_scene_xml writes (the sidecar is "scene.xml.bin")
     s.save(path)
     xml = open(path, "rb").read()
     binary = open(path + ".bin", "rb").read()

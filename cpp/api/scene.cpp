@@ -406,7 +406,7 @@ void Scene::commit() {
   if (m_structure_dirty || top_dirty) build_render_scene();
   m_structure_dirty = false;
   m_stats.mesh_bvh_builds = m_accel->mesh_builds();
-  m_stats.mesh_bvh_builds_last = m_accel->mesh_builds() - builds_before;
+  m_stats.mesh_bvh_builds_last_commit = m_accel->mesh_builds() - builds_before;
   m_stats.top_level_builds = m_accel->top_level_builds();
   m_stats.alpha_tested_meshes = 0;
   for (size_t i = 0; i < m_meshes.size(); ++i) m_stats.alpha_tested_meshes += m_meshes[i] && m_accel->mesh_alpha_tested(uint32_t(i));
@@ -576,7 +576,7 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   render_path_traced(m_render_scene, settings, film);
   film->stats.alpha_test_calls = m_accel->alpha_test_calls() - alpha_calls_before;
   film->stats.mesh_bvh_builds = m_stats.mesh_bvh_builds;
-  film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last;
+  film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last_commit;
   film->stats.top_level_builds = m_stats.top_level_builds;
 }
 

@@ -40,7 +40,7 @@ struct ImportResult {
 
 struct CommitStats {
   uint64_t mesh_bvh_builds = 0;        ///< total since the scene was created
-  uint64_t mesh_bvh_builds_last = 0;   ///< during the last commit
+  uint64_t mesh_bvh_builds_last_commit = 0;   ///< during the last commit
   uint64_t top_level_builds = 0;
   uint64_t commits = 0;
   uint64_t alpha_tested_meshes = 0;    ///< meshes traversed with the alpha test (cut-outs)

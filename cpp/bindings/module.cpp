@@ -548,7 +548,7 @@ a BVH build). render() commits pending edits first.)doc")
       .def_property_readonly("commit_stats", [](const Scene& s) {
         py::dict d;
         d["mesh_bvh_builds"] = s.commit_stats().mesh_bvh_builds;
-        d["mesh_bvh_builds_last"] = s.commit_stats().mesh_bvh_builds_last;
+        d["mesh_bvh_builds_last_commit"] = s.commit_stats().mesh_bvh_builds_last_commit;
         d["top_level_builds"] = s.commit_stats().top_level_builds;
         d["commits"] = s.commit_stats().commits;
         d["alpha_tested_meshes"] = s.commit_stats().alpha_tested_meshes;  // cut-out meshes

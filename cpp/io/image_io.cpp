@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <mutex>
 #include <string>
@@ -15,9 +16,18 @@ namespace {
 
 using sg::ImageData;
 
-/// The largest image synthgen decodes (pixels): larger headers are refused before any
-/// allocation (a corrupt or hostile file cannot ask for gigabytes).
-constexpr double k_max_pixels = 1 << 28;  // 268 Mpixel (16384^2)
+/// The largest image synthgen decodes: 16384^2 pixels (268 Mpixel) and 4 values per pixel on
+/// average (4 GiB of floats); larger headers are refused before any allocation (a corrupt or
+/// hostile file cannot ask for more). $SYNTHGEN_MAX_IMAGE_PIXELS lowers the pixel limit (the
+/// fuzz targets run under a 2 GiB memory limit).
+double max_pixels() {
+  static const double v = [] {
+    const char* e = std::getenv("SYNTHGEN_MAX_IMAGE_PIXELS");
+    double d = e ? std::strtod(e, nullptr) : 0.0;
+    return d >= 1.0 && d < double(1 << 28) ? d : double(1 << 28);
+  }();
+  return v;
+}
 
 /// Captures what format libraries (libpng, libjpeg) print to stderr while it lives, so their
 /// warnings never reach the user's terminal; the text is added to the error of a failed read.
@@ -82,15 +92,16 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
     *error = "image has no pixels";
     return false;
   }
-  if (double(img->width) * img->height > k_max_pixels || img->channels > 64) {
+  const double pixels = double(img->width) * img->height;
+  if (pixels > max_pixels() || img->channels > 64 || pixels * img->channels > 4.0 * max_pixels()) {
     *error = "image of " + std::to_string(img->width) + " x " + std::to_string(img->height) + " pixels x " +
-             std::to_string(img->channels) + " channels is larger than synthgen reads (at most 16384 x 16384 "
-             "pixels, 64 channels)";
+             std::to_string(img->channels) + " channels is larger than synthgen reads (at most " +
+             std::to_string((unsigned long long)max_pixels()) + " pixels (16384 x 16384), 4 values per pixel on "
+             "average, 64 channels)";
     return false;
   }
   img->pixels.resize(size_t(img->width) * img->height * img->channels);
-  // One thread: synthgen parallelizes across frames, and a reader in a forked child
-  // (core/isolate.h) has no pool threads to hand work to.
+  // One thread: synthgen parallelizes across frames and files (core/isolate.h readers).
   in->threads(1);
   if (!in->read_image(0, 0, 0, img->channels, OIIO::TypeDesc::FLOAT, img->pixels.data())) {
     *error = "cannot decode image (" + one_line(in->geterror()) + ")";

@@ -173,6 +173,50 @@ static void check_ply_header(const std::string& path) {
                               std::to_string(data) + "): truncated or corrupt");
 }
 
+// assimp 5.2 allocates what a GLB's header and chunk headers declare before it checks them
+// against the file (a 200-byte file asked for 4 GiB). The 12-byte header and the chunk
+// headers are therefore checked first: magic, version 2, the declared length equal to the
+// file's, every chunk inside it (glTF 2.0 spec, "Binary glTF Layout").
+static void check_glb_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return;
+  unsigned char h[12] = {0};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  if (in.gcount() < 4 || h[0] != 'g' || h[1] != 'l' || h[2] != 'T' || h[3] != 'F') return;  // not a GLB
+  auto u32 = [](const unsigned char* p) {
+    return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+  };
+  std::error_code ec;
+  uint64_t size = fs::file_size(path, ec);
+  if (in.gcount() < 12) throw FileError(path, "a glTF binary (GLB) cut short inside its 12-byte header");
+  uint64_t declared = u32(h + 8);
+  if (declared > size)
+    throw FileError(path, "a glTF binary (GLB) truncated: its header declares " + std::to_string(declared) +
+                              " bytes, the file has " + std::to_string(size));
+  if (u32(h + 4) == 1) {  // glTF 1.0 (KHR_binary_glTF): one content block after a 20-byte header
+    unsigned char c[4];
+    in.read(reinterpret_cast<char*>(c), sizeof c);
+    if (in.gcount() < 4 || 20 + uint64_t(u32(c)) > declared)
+      throw FileError(path, "a glTF 1.0 binary whose content block runs past the end of the file");
+    return;
+  }
+  if (u32(h + 4) != 2) return;  // an unknown version: the importer reports it
+  uint64_t pos = 12;
+  for (int chunk = 0; pos < declared; ++chunk) {
+    unsigned char c[8];
+    in.seekg(std::streamoff(pos));
+    in.read(reinterpret_cast<char*>(c), sizeof c);
+    if (in.gcount() < 8 || pos + 8 > declared)
+      throw FileError(path, "a glTF binary (GLB) whose chunk " + std::to_string(chunk) + " header is cut short");
+    uint64_t length = u32(c);
+    if (pos + 8 + length > declared)
+      throw FileError(path, "a glTF binary (GLB) whose chunk " + std::to_string(chunk) + " declares " +
+                                std::to_string(length) + " bytes past the end of the file (" + std::to_string(declared) +
+                                " bytes)");
+    pos += 8 + length;
+  }
+}
+
 /// Why assimp found no reader, when the file's own header tells: a glTF binary whose
 /// declared length exceeds the file (truncated), an empty file; "" when nothing is known.
 static std::string diagnose_unreadable(const std::string& path) {
@@ -200,6 +244,7 @@ ImportedModel import_mesh_file(const std::string& path) {
   if (fs::is_directory(path, ec)) throw FileError(path, "is a directory, not a mesh file");
   check_obj_vertices(path);
   check_ply_header(path);
+  check_glb_header(path);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene = importer.ReadFile(

@@ -99,7 +99,7 @@ TEST(scene_api, commit_rebuilds_only_edited_meshes) {
   s.set_camera(test_camera());
   s.commit();
   EXPECT_EQ(s.commit_stats().mesh_bvh_builds, 3u);
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 3u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 3u);
   EXPECT_FALSE(s.has_pending_edits());
   Film f;
   s.render(quick_settings(), &f);
@@ -109,7 +109,7 @@ TEST(scene_api, commit_rebuilds_only_edited_meshes) {
   s.set_instance_transform(i_box, Transform::translate(Vec3f(-1.5f, 1.5f, 0.5f)));
   EXPECT_TRUE(s.has_pending_edits());
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
   s.render(quick_settings(), &f);
   EXPECT_EQ(label_at(s, f, Vec3f(-1.5f, 1.5f, 0.5f)), 20u);
   EXPECT_NE(label_at(s, f, Vec3f(-1.5f, -0.45f, 0.55f)), 20u) << "the box is still at its old place";
@@ -117,7 +117,7 @@ TEST(scene_api, commit_rebuilds_only_edited_meshes) {
   // Change an instance material.
   s.set_instance_material(i_box, red);
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
   s.render(quick_settings(), &f);
   {
     float u, v;
@@ -128,14 +128,14 @@ TEST(scene_api, commit_rebuilds_only_edited_meshes) {
   // A new instance of an existing mesh.
   uint32_t i_box2 = s.add_instance(m_box, Transform::translate(Vec3f(0.f, -2.f, 0.5f)), 2, 21u, red);
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
   s.render(quick_settings(), &f);
   EXPECT_EQ(label_at(s, f, Vec3f(0.f, -2.f, 0.5f)), 21u);
 
   // Update a material.
   s.update_material(red, "diffuse", diffuse_params(0.25));
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
   s.render(quick_settings(), &f);
   {
     float u, v;
@@ -147,20 +147,20 @@ TEST(scene_api, commit_rebuilds_only_edited_meshes) {
   s.set_instance_labels(i_box2, 7, 77);
   EXPECT_TRUE(s.has_pending_edits());
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
   s.render(quick_settings(), &f);
   EXPECT_EQ(label_at(s, f, Vec3f(0.f, -2.f, 0.5f)), 77u);
 
   // Removing an instance: no mesh build either.
   s.remove_instance(i_tet);
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
   EXPECT_EQ(s.commit_stats().mesh_bvh_builds, 3u);
 
   // Editing one mesh rebuilds exactly that mesh; both of its instances follow.
   s.update_mesh(m_box, box(Vec3f(-0.5f, -0.5f, -0.5f), Vec3f(0.5f, 0.5f, 1.5f)));
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 1u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 1u);
   EXPECT_EQ(s.commit_stats().mesh_bvh_builds, 4u);
   s.render(quick_settings(), &f);
   EXPECT_EQ(label_at(s, f, Vec3f(0.f, -2.5f, 1.8f)), 77u) << "second instance does not see the edited mesh";
@@ -168,7 +168,7 @@ TEST(scene_api, commit_rebuilds_only_edited_meshes) {
   // Nothing pending: a commit builds nothing.
   EXPECT_FALSE(s.has_pending_edits());
   s.commit();
-  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last, 0u);
+  EXPECT_EQ(s.commit_stats().mesh_bvh_builds_last_commit, 0u);
 }
 
 namespace {

@@ -275,7 +275,7 @@ def test_bvh_builds_stay_honest(tmp_path):
     def builds_after(edit):
         edit()
         s.commit()
-        return s.commit_stats["mesh_bvh_builds_last"]
+        return s.commit_stats["mesh_bvh_builds_last_commit"]
 
     moved = behind.copy()
     moved[2, 3] = 1.5

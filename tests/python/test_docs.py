@@ -1,5 +1,6 @@
 """Documentation generated from code stays in sync with it."""
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -56,3 +57,53 @@ def test_no_python_source_file_is_too_long():
         if n > 620:
             long[str(f.relative_to(ROOT))] = n
     assert not long, long
+
+
+def _tables(text: str):
+    """Markdown tables as lists of rows (lists of cells), with the line of their header."""
+    lines = text.split("\n")
+    tables, i = [], 0
+    while i < len(lines):
+        if lines[i].startswith("|") and i + 1 < len(lines) and set(lines[i + 1].replace("|", "").strip()) <= set("-: "):
+            start, rows = i, []
+            while i < len(lines) and lines[i].startswith("|"):
+                rows.append([c.strip() for c in re.split(r"(?<!\\)\|", lines[i].strip()[1:-1])])
+                i += 1
+            tables.append((start + 1, rows))
+        else:
+            i += 1
+    return tables
+
+
+def test_markdown_tables_are_whole():
+    """No table is cut by a blank line (rows after it render as text), every row has the
+    header's cells, and every example in scenarios/ is described in its README."""
+    docs = [ROOT / "README.md", ROOT / "scenarios" / "README.md"] + sorted((ROOT / "docs").glob("*.md"))
+    for path in docs:
+        text = path.read_text()
+        lines = text.split("\n")
+        for i in range(1, len(lines) - 1):
+            assert not (lines[i] == "" and lines[i - 1].startswith("|") and lines[i + 1].startswith("|")), \
+                f"{path}:{i + 1}: a blank line cuts a table"
+        for line, rows in _tables(text):
+            header = rows[0]
+            for r in rows[1:]:
+                assert len(r) == len(header), f"{path}:{line}: row {r[:1]} has {len(r)} cells"
+    readme = (ROOT / "scenarios" / "README.md").read_text()
+    described = {r[0].strip("`") for _, rows in _tables(readme) for r in rows[2:]}
+    examples = {p.name for p in (ROOT / "scenarios").glob("*.yaml")}
+    assert examples <= described, f"not described in scenarios/README.md: {sorted(examples - described)}"
+
+
+def test_generated_references_describe_every_key():
+    """Every key of the scenario and scene-file references says what it is, and declared
+    defaults read as declared (0.8, not float32's 0.800000011920929)."""
+    for name in ("scenarios.md", "scene_file.md"):
+        text = (ROOT / "docs" / name).read_text()
+        block = text[text.index("<!-- BEGIN GENERATED"):text.index("<!-- END GENERATED")]
+        lines = [ln for ln in block.split("\n") if re.match(r"^\s*[A-Za-z_]\w*: ", ln)]
+        assert len(lines) > 100, name
+        empty = [ln.strip() for ln in lines if ln.rstrip().endswith(" -") or " - " not in ln]
+        assert not empty, f"{name}: keys without a description: {empty[:5]}"
+        noisy = re.findall(r"\d\.\d{9,}", block)
+        assert not noisy, f"{name}: float32 noise in defaults: {noisy[:3]}"

@@ -10,6 +10,7 @@ import synthgen
 from synthgen import cli
 from synthgen.scenario import schema as scenario_schema
 from synthgen.schema import fields as F
+from synthgen.schema.plugins import _short
 from synthgen.schema.random import Random
 from synthgen.scene import scene_file
 
@@ -17,10 +18,12 @@ KINDS = {"material": scene_file.MATERIAL, "texture": scene_file.TEXTURE, "light"
 
 
 def _default(p):
+    """The declared default as the schemas hold it: float32 values as their shortest decimal
+    (0.8f is 0.8, not 0.800000011920929; the renderer gets the same float32)."""
     if p["required"] or not p["has_default"]:
         return None
     d = p["default"]
-    return tuple(d) if isinstance(d, list) else d
+    return tuple(_short(float(x)) for x in d) if isinstance(d, list) else _short(d)
 
 
 def _field_default(f):
@@ -145,3 +148,4 @@ def test_aliases_and_combinations_reach_yaml(tmp_path):
     both = dict(base, textures={"t": {"type": "image", "file": str(img), "filename": str(img)}})
     with pytest.raises(SceneFileError, match="same key"):
         synthgen.build_scene(both)
+

@@ -61,12 +61,16 @@ def test_first_commit_builds_every_mesh_once():
     assert s.has_pending_edits()
     s.commit()
     st = s.commit_stats
-    assert st["mesh_bvh_builds"] == 4 and st["mesh_bvh_builds_last"] == 4 and st["commits"] == 1
+    assert st["mesh_bvh_builds"] == 4 and st["mesh_bvh_builds_last_commit"] == 4 and st["commits"] == 1
     assert not s.has_pending_edits()
     r = render(s)
     assert r.stats["mesh_bvh_builds"] == 4 and r.stats["mesh_bvh_builds_last_commit"] == 4
     assert s.commit_stats["commits"] == 1, "render() without pending edits must not commit"
     assert set(np.unique(r.instance_id)) == {10, 11, 20, 30, 90}
+    # One name per figure: the commit counters read the same in commit_stats and render stats.
+    shared = {"mesh_bvh_builds", "mesh_bvh_builds_last_commit"}
+    assert shared <= set(s.commit_stats) and shared <= set(r.stats)
+    assert not {k for k in s.commit_stats if k.startswith("mesh_bvh")} - shared
 
 
 def _committed(s):
@@ -81,7 +85,7 @@ def test_moving_an_instance_rebuilds_no_mesh_and_moves_the_mask():
     s.set_instance_transform(ids["card"], P.translate([-0.7 + dx, 0.5, Z]) @ FACING_CAMERA)
     assert s.has_pending_edits()
     st = _committed(s)
-    assert st["mesh_bvh_builds_last"] == 0 and st["mesh_bvh_builds"] == 4
+    assert st["mesh_bvh_builds_last_commit"] == 0 and st["mesh_bvh_builds"] == 4
     after = render(s)
     shift = int(round(FX * dx / Z))
     assert shift == 10
@@ -101,7 +105,7 @@ def test_adding_an_instance_of_an_existing_mesh_rebuilds_no_mesh():
     render(s)
     new = s.add_instance(m["sphere"], P.translate([0.0, -0.5, Z - 1]), class_id=2, instance_id=21)
     st = _committed(s)
-    assert st["mesh_bvh_builds_last"] == 0 and st["mesh_bvh_builds"] == 4
+    assert st["mesh_bvh_builds_last_commit"] == 0 and st["mesh_bvh_builds"] == 4
     r = render(s)
     assert (r.instance_id == 21).sum() > 100
     # projected centre of the new sphere
@@ -116,13 +120,13 @@ def test_changing_a_material_rebuilds_no_mesh_and_changes_albedo():
     np.testing.assert_array_equal(before.albedo[box_a], np.float32([0.9, 0.1, 0.1])[None].repeat(box_a.sum(), 0))
     s.update_material(m["red"], "diffuse", {"albedo": [0.2, 0.7, 0.3]})
     st = _committed(s)
-    assert st["mesh_bvh_builds_last"] == 0
+    assert st["mesh_bvh_builds_last_commit"] == 0
     r = render(s)
     assert np.all(r.albedo[box_a] == np.float32([0.2, 0.7, 0.3]))
     assert not np.array_equal(r.rgb[box_a], before.rgb[box_a])
     # Re-assigning an instance's material: box_b (grey) gets the edited material.
     s.set_instance_material(ids["box_b"], m["red"])
-    assert _committed(s)["mesh_bvh_builds_last"] == 0
+    assert _committed(s)["mesh_bvh_builds_last_commit"] == 0
     r2 = render(s)
     assert np.all(r2.albedo[r2.instance_id == 11] == np.float32([0.2, 0.7, 0.3]))
 
@@ -132,7 +136,7 @@ def test_changing_labels_rebuilds_no_mesh_and_relabels_the_same_pixels():
     before = render(s)
     s.set_instance_labels(ids["sphere"], 5, 555)
     st = _committed(s)
-    assert st["mesh_bvh_builds_last"] == 0
+    assert st["mesh_bvh_builds_last_commit"] == 0
     r = render(s)
     was = before.instance_id == 20
     np.testing.assert_array_equal(r.instance_id == 555, was)
@@ -146,7 +150,7 @@ def test_removing_an_instance():
     s, m, ids = build()
     before = render(s)
     s.remove_instance(ids["sphere"])
-    assert _committed(s)["mesh_bvh_builds_last"] == 0
+    assert _committed(s)["mesh_bvh_builds_last_commit"] == 0
     r = render(s)
     assert not np.any(r.instance_id == 20)
     # the wall behind becomes visible where the sphere was
@@ -158,7 +162,7 @@ def test_update_mesh_rebuilds_exactly_one_mesh():
     before = render(s)
     s.update_mesh(m["sphere"], **P.uv_sphere(0.15, 32, 16))
     st = _committed(s)
-    assert st["mesh_bvh_builds_last"] == 1 and st["mesh_bvh_builds"] == 5
+    assert st["mesh_bvh_builds_last_commit"] == 1 and st["mesh_bvh_builds"] == 5
     r = render(s)
     area_before, area_after = (before.instance_id == 20).sum(), (r.instance_id == 20).sum()
     # Projected area scales with the radius squared: (0.15 / 0.25)^2 = 0.36.

@@ -194,7 +194,10 @@ class FrameRenderer:
         else:
             keys = shape.material_ids
             mats = [m if m >= 0 else self._default_material() for m in keys]
-        ctx = randomize.ObjectContext(self.library, rng, o, shape.lo, shape.hi)
+        model = kind in ("primitive", "mesh", "asset")
+        ctx = randomize.ObjectContext(self.library, rng, o, shape.lo, shape.hi,
+                                      forward=_AXIS[(o.forward or shape.forward or "+x") if model else "+x"],
+                                      up=_AXIS[(o.up or shape.up or "+y") if model else "+y"])
         done = {}
         for r in randomize.randomizers(by="apply_order"):
             value = o.randomizers.get(r.key)

@@ -49,6 +49,10 @@ class ObjectContext:
     spec: Any                     #: the sampled object (synthgen.scenario.ObjectSpec)
     shape_lo: np.ndarray          #: object-space bounds of the object's shape
     shape_hi: np.ndarray
+    #: The shape's forward and up directions in its object space (unit axes; declared by the
+    #: asset or objects[].forward/up, else +x and +y): where its front is and which way is up.
+    forward: Tuple[float, float, float] = (1.0, 0.0, 0.0)
+    up: Tuple[float, float, float] = (0.0, 1.0, 0.0)
 
 
 class Randomizer:

@@ -1,4 +1,4 @@
-"""Randomizer ``decals``: images projected onto the object's front (its -z side) from a
+"""Randomizer ``decals``: images projected onto the object's front (the side its forward axis points to) from a
 projector in object space -- image files, generated sign pictograms or licence plates --
 over its material, before wear. Each decal's kind, text and size go into the metadata."""
 from __future__ import annotations
@@ -17,14 +17,20 @@ from . import ObjectContext, Randomizer, register
 
 DECAL = Record({
     "image": FilePath(None, doc="an image file (PNG with alpha, JPEG, EXR)"),
-    "pictogram": Record({"family": R(Choice(list(signs.FAMILIES), REQUIRED)),
-                         "text": R(String(None))}, default=None, doc="a generated sign pictogram"),
-    "plate": Record({"country": R(Choice(list(plates.COUNTRIES), REQUIRED))}, default=None,
+    "pictogram": Record({"family": R(Choice(list(signs.FAMILIES), REQUIRED, doc="sign family (shape and colours)")),
+                         "text": R(String(None, doc="text on the sign, e.g. a speed limit '70' (default: the "
+                                                    "family's own)"))}, default=None, doc="a generated sign pictogram"),
+    "plate": Record({"country": R(Choice(list(plates.COUNTRIES), REQUIRED,
+                                         doc="registration format and plate layout (ru: GOST R 50577, de: DIN 74069)"))},
+                    default=None,
                     doc="a generated licence plate"),
     "probability": Number(1.0, min=0.0, max=1.0, doc="chance that an instance gets the decal"),
-    "size": R(Number(0.4, min=0.01, max=1.0, doc="decal width as a fraction of the object's width")),
-    "height": R(Number(0.5, min=0.0, max=1.0, doc="decal centre height, fraction of the object's height")),
-}, one_of=[("image", "pictogram", "plate")], doc="an image projected onto the object's front (-z side)")
+    "size": R(Number(0.4, min=0.01, max=1.0, doc="decal width as a fraction of the object's width (across its "
+                                                 "forward axis)")),
+    "height": R(Number(0.5, min=0.0, max=1.0, doc="decal centre height, fraction of the object's height (0: bottom)")),
+}, one_of=[("image", "pictogram", "plate")],
+    doc="an image projected onto the object's front: the side its forward axis points to (objects[].forward or "
+        "the asset's; +x for primitives), upright along its up axis, read from in front")
 
 SCHEMA = ListOf(DECAL, [], doc="decals projected onto the front, before wear")
 
@@ -74,13 +80,18 @@ class Decals(Randomizer):
             else:
                 image, aspect = d["image"], image_aspect(d["image"])
                 info = {"kind": "image", "file": os.path.basename(d["image"])}
-            width = float(d["size"]) * float(ext[0])
-            cy = float(lo[1] + float(d["height"]) * ext[1])
+            # The front: the side the shape's forward axis points to, the image upright along its
+            # up axis; sizes along the remaining (lateral) axis and up.
+            f, u = np.asarray(ctx.forward, np.float64), np.asarray(ctx.up, np.float64)
+            fi, ui = int(np.argmax(np.abs(f))), int(np.argmax(np.abs(u)))
+            li = 3 - fi - ui
+            width = float(d["size"]) * float(ext[li])
+            target = centre + (float(d["height"]) - 0.5) * float(ext[ui]) * u
             dist = 2.0 * float(ext.max()) + 1e-3
-            target = [float(centre[0]), cy, float(centre[2])]
-            position = [float(centre[0]), cy, float(lo[2]) - dist]
-            fov = float(np.degrees(2.0 * np.arctan(0.5 * width / aspect / (dist + 0.5 * ext[2]))))
-            mats = wear.decal(ctx.scene, mats, image, position=position, look_at=target, fov=max(fov, 0.1),
+            position = target + (0.5 * float(ext[fi]) + dist) * f
+            fov = float(np.degrees(2.0 * np.arctan(0.5 * width / aspect / (dist + 0.5 * ext[fi]))))
+            mats = wear.decal(ctx.scene, mats, image, position=[float(v) for v in position],
+                              look_at=[float(v) for v in target], up=[float(v) for v in u], fov=max(fov, 0.1),
                               aspect=aspect, occlusion=False, space="object")
             # The decal's size on the object's front (object units): the image keeps its aspect.
             info["size"] = [round(width, 6), round(width / aspect, 6)]

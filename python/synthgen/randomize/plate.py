@@ -15,7 +15,8 @@ from ..scene import primitives as P
 from . import ObjectContext, Randomizer, register
 
 SCHEMA = Record({
-    "country": R(Choice(list(plates.COUNTRIES), REQUIRED)),
+    "country": R(Choice(list(plates.COUNTRIES), REQUIRED,
+                        doc="registration format and plate layout (ru: GOST R 50577, de: DIN 74069)")),
     "mount_height": R(Number(0.6, min=0.0, max=10.0, doc="height of the plate's lower edge; a post below it")),
 }, default=None, doc="a licence plate with a random valid registration (its text goes into the metadata)")
 

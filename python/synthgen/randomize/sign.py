@@ -14,7 +14,7 @@ from ..scene import signs
 from . import ObjectContext, Randomizer, register
 
 SCHEMA = Record({
-    "family": R(Choice(list(signs.FAMILIES), REQUIRED)),
+    "family": R(Choice(list(signs.FAMILIES), REQUIRED, doc="sign family (shape and colours)")),
     "text": R(String(None, doc="number of a prohibitory sign, symbol of a warning / information sign")),
     "size": R(Number(0.7, min=0.05, max=5.0, doc="sign width in metres")),
     "mount_height": R(Number(1.5, min=0.0, max=10.0, doc="height of the sign's lower edge; a pole below it")),

@@ -14,38 +14,54 @@ from . import ObjectContext, Randomizer, register
 EFFECTS = ("rust", "dirt", "scratches", "ice")
 
 
-def _wear_effect(params: Dict[str, Field]) -> Record:
+def _wear_effect(amount: float, params: Dict[str, Field], doc: str) -> Record:
     return Record(dict({"probability": Number(1.0, min=0.0, max=1.0, doc="chance that an instance gets the effect"),
-                        "amount": R(Number(0.35, min=0.0, max=1.0, doc="covered fraction")),
+                        "amount": R(Number(amount, min=0.0, max=1.0, doc="covered fraction")),
                         "seed": R(Integer(None, min=0, max=(1 << 31) - 1, doc="pattern seed (default: drawn)"))},
-                       **params), default=None)
+                       **params), default=None, doc=doc)
 
 
 _RAMP_STOP = Record({"position": Number(REQUIRED, min=0.0, max=1.0, doc="position in the ramp"),
                      "color": R(Vector(3, REQUIRED, min=0.0, max=1.0, broadcast=True, doc="linear RGB at that position"))})
 
+_SCALE_DOC = "noise features across the object (relative mapping: the same pattern at any model size)"
+
+# NOTE: the defaults are the presets' (synthgen.scene.wear), so that a scenario's
+# `rust: {}` and `wear.rust(scene, base)` make the same rust.
 SCHEMA = Record({
-    "rust": _wear_effect({"scale": R(Number(3.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(0.6, min=0.0, max=2.0)),
-                          "roughness": R(Number(0.85, min=0.0, max=1.0)), "bump": R(Number(0.002, min=0.0, max=0.05)),
-                          "colors": ListOf(_RAMP_STOP, None, min_items=1,
-                                           doc="colour ramp of the rust (default: dark brown to orange)")}),
-    "dirt": _wear_effect({"scale": R(Number(5.0, min=0.001, max=1000.0)), "bottom_bias": R(Number(1.0, min=0.0, max=4.0)),
-                          "ao_radius": R(Number(0.3, min=0.0001, max=100.0, doc="crease search distance, metres")),
-                          "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)")),
-                          "color": R(Vector(3, (0.12, 0.09, 0.06), min=0.0, max=1.0, broadcast=True, doc="dirt colour (linear RGB)")),
-                          "roughness": R(Number(0.95, min=0.0, max=1.0))}),
-    "scratches": _wear_effect({"density": R(Number(8.0, min=0.001, max=10000.0)),
-                               "width": R(Number(0.04, min=0.0001, max=1.0)),
-                               "direction": R(Choice(["x", "y", "z"], None, doc="object axis the scratches run along "
-                                                                                 "(default: random directions)")),
-                               "elongation": R(Number(8.0, min=1.0, max=100.0, doc="cell stretch along direction")),
-                               "metal": R(Choice(["aluminium", "chrome", "copper", "gold", "iron", "silver"],
-                                                 "aluminium")),
-                               "roughness": R(Number(0.35, min=0.0, max=1.0)),
-                               "depth": R(Number(0.0, min=0.0, max=0.01, doc="groove depth in metres (tilts the "
-                                                                             "metal's normal; 0: flat)"))}),
-    "ice": _wear_effect({"scale": R(Number(4.0, min=0.001, max=1000.0)), "top_bias": R(Number(0.5, min=0.0, max=2.0)),
-                         "bump": R(Number(0.003, min=0.0, max=0.05))}),
+    "rust": _wear_effect(0.35, {
+        "scale": R(Number(3.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
+        "bottom_bias": R(Number(0.6, min=0.0, max=2.0, doc="more rust low on the object (0: none, 2: strongly)")),
+        "roughness": R(Number(0.85, min=0.0, max=1.0, doc="rust roughness (>= 0.8: Lambertian)")),
+        "bump": R(Number(0.002, min=0.0, max=0.05, doc="height of the rust's relief, metres")),
+        "colors": ListOf(_RAMP_STOP, None, min_items=1, doc="colour ramp of the rust (default: dark brown to orange)")},
+        "rust patches with relief, more towards the bottom (synthgen.scene.wear.rust)"),
+    "dirt": _wear_effect(0.4, {
+        "scale": R(Number(5.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
+        "bottom_bias": R(Number(1.0, min=0.0, max=4.0, doc="more dirt low on the object, as gravity leaves it "
+                                                           "(0: none)")),
+        "ao_radius": R(Number(0.3, min=0.0001, max=100.0, doc="crease search distance, metres")),
+        "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)")),
+        "color": R(Vector(3, (0.12, 0.09, 0.06), min=0.0, max=1.0, broadcast=True, doc="dirt colour (linear RGB)")),
+        "roughness": R(Number(0.95, min=0.0, max=1.0, doc="dirt roughness"))},
+        "dirt settled by gravity and in creases (synthgen.scene.wear.dirt)"),
+    "scratches": _wear_effect(1.0, {
+        "density": R(Number(8.0, min=0.001, max=10000.0, doc="cells of the scratch pattern per metre")),
+        "width": R(Number(0.04, min=0.0001, max=1.0, doc="line width, as a fraction of a cell")),
+        "direction": R(Choice(["x", "y", "z"], None, doc="object axis the scratches run along "
+                                                          "(default: random directions)")),
+        "elongation": R(Number(8.0, min=1.0, max=100.0, doc="cell stretch along direction")),
+        "metal": R(Choice(["aluminium", "chrome", "copper", "gold", "iron", "silver"], "aluminium",
+                          doc="the bare metal under the scratched paint")),
+        "roughness": R(Number(0.35, min=0.0, max=1.0, doc="roughness of the bare metal")),
+        "depth": R(Number(0.0, min=0.0, max=0.01, doc="groove depth in metres (tilts the "
+                                                      "metal's normal; 0: flat)"))},
+        "scratches through the paint down to bare metal (synthgen.scene.wear.scratches)"),
+    "ice": _wear_effect(0.5, {
+        "scale": R(Number(4.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
+        "top_bias": R(Number(0.5, min=0.0, max=2.0, doc="more ice high on the object (0: none)")),
+        "bump": R(Number(0.003, min=0.0, max=0.05, doc="height of the frost's relief, metres"))},
+        "ice and frost, more towards the top (synthgen.scene.wear.ice)"),
 }, default=None, doc="wear effects (synthgen.wear presets), applied in the order rust, dirt, scratches, ice")
 
 

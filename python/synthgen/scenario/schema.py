@@ -37,13 +37,17 @@ ORBIT = {"target": R(Vector(3, (0.0, 0.0, 0.0), doc="point looked at")),
          "elevation": R(Number(20.0, min=-89.0, max=89.0, doc="degrees above the ground")),
          "azimuth": R(Number(0.0, min=-360.0, max=720.0, doc="degrees about +y")),
          "jitter": R(Number(0.0, min=0.0, doc="uniform target jitter in metres (a cube of this half-size)"))}
-LOOK_AT = {"eye": R(Vector(3, REQUIRED)), "target": R(Vector(3, (0.0, 0.0, 0.0)))}
+LOOK_AT = {"eye": R(Vector(3, REQUIRED, doc="camera position in metres (world, y up)")),
+           "target": R(Vector(3, (0.0, 0.0, 0.0), doc="point looked at"))}
 
 #: The camera plugin's intrinsics (the image size is ``resolution``) and a pose.
 CAMERA = randomized(settings_record("camera", "pinhole", scenario=True, keys=("fov_y", "fx", "fy", "cx", "cy"),
                                     default=EMPTY, doc="camera")).extend(
-    {"pose": Record({"type": Choice(["orbit", "look_at"], "orbit")}, tag="type",
-                    variants={"orbit": ORBIT, "look_at": LOOK_AT}, default=EMPTY)})
+    {"pose": Record({"type": Choice(["orbit", "look_at"], "orbit",
+                                    doc="orbit: around a target at a distance, elevation and azimuth; look_at: from "
+                                        "an eye point")}, tag="type",
+                    variants={"orbit": ORBIT, "look_at": LOOK_AT}, default=EMPTY,
+                    doc="where the camera is and what it looks at (image y points down, world y up)")})
 
 #: Keys of ``objects[]`` that say what the object is (exactly one is given).
 SHAPE_KEYS = ("primitive", "mesh", "asset") + tuple(r.key for r in randomize.randomizers() if r.shape)
@@ -117,7 +121,7 @@ SCENARIO_SCHEMA = Record(
      "ground": Record({"size": Number(None, min=0.0, min_open=True,
                                       doc="edge length in metres of a square ground (default: the ground reaches "
                                           "the horizon)"),
-                       "enabled": Bool(True),
+                       "enabled": Bool(True, doc="false: no ground (objects float in the sky)"),
                        "material": R(MATERIAL, default={"type": "diffuse", "albedo": [0.3, 0.3, 0.3]})},
                       default=EMPTY, doc="ground plane y = 0 (class 0, unlabelled)"),
      "objects": ListOf(OBJECT, REQUIRED, min_items=1, doc="object kinds"),

@@ -17,6 +17,9 @@ colours and scalars, and plugins that need such a reference (``mix``) are left o
 """
 from __future__ import annotations
 
+import math
+import struct
+
 import functools
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
@@ -46,13 +49,28 @@ def plugin_names(kind: str) -> List[str]:
     return list(_core_plugin_names(kind))
 
 
+def _short(x: Any) -> Any:
+    """A float declared in C++ as a float32 (0.8f reads back as 0.800000011920929) as the
+    shortest decimal with the same float32 value (0.8): what the declaration says."""
+    if not isinstance(x, float) or not math.isfinite(x):
+        return x
+    f32 = struct.unpack("f", struct.pack("f", x))[0]
+    if f32 != x:
+        return x  # a double: kept
+    for digits in range(1, 10):
+        y = float(f"{x:.{digits}g}")
+        if struct.unpack("f", struct.pack("f", y))[0] == f32:
+            return y
+    return x
+
+
 def _default(p: Mapping[str, Any]) -> Any:
     if p["required"]:
         return REQUIRED
     if not p["has_default"]:
         return None
     d = p["default"]
-    return tuple(float(x) for x in d) if isinstance(d, list) else d
+    return tuple(_short(float(x)) for x in d) if isinstance(d, list) else _short(d)
 
 
 def _doc(p: Mapping[str, Any]) -> str:
