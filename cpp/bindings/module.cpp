@@ -329,16 +329,36 @@ has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world spa
            },
            py::arg("u"), py::arg("v"), "(origin, unit direction) of the ray through image position (u, v).");
 
-  py::class_<Film, std::shared_ptr<Film>>(m, "RenderResult", "Outputs of Scene.render as numpy arrays.")
-      .def_property_readonly("rgb", [](std::shared_ptr<Film> f) { return wrap(f, f->rgb, {f->height, f->width, 3}); })
-      .def_property_readonly("alpha", [](std::shared_ptr<Film> f) { return wrap(f, f->alpha, {f->height, f->width}); })
-      .def_property_readonly("depth", [](std::shared_ptr<Film> f) { return wrap(f, f->depth, {f->height, f->width}); })
-      .def_property_readonly("distance", [](std::shared_ptr<Film> f) { return wrap(f, f->distance, {f->height, f->width}); })
-      .def_property_readonly("normal", [](std::shared_ptr<Film> f) { return wrap(f, f->normal, {f->height, f->width, 3}); })
-      .def_property_readonly("albedo", [](std::shared_ptr<Film> f) { return wrap(f, f->albedo, {f->height, f->width, 3}); })
-      .def_property_readonly("instance_id", [](std::shared_ptr<Film> f) { return wrap(f, f->instance_id, {f->height, f->width}); })
-      .def_property_readonly("class_id", [](std::shared_ptr<Film> f) { return wrap(f, f->class_id, {f->height, f->width}); })
-      .def_property_readonly("stats", [](std::shared_ptr<Film> f) { return stats_to_dict(f->stats); });
+  py::class_<Film, std::shared_ptr<Film>>(m, "RenderResult",
+                                          "Outputs of Scene.render as numpy arrays (views of the render's buffers).")
+      .def_property_readonly(
+          "rgb", [](std::shared_ptr<Film> f) { return wrap(f, f->rgb, {f->height, f->width, 3}); },
+          "H x W x 3 float32 linear radiance (scene-referred, not display-encoded: srgb8() or\n"
+          "synthgen.outputs.files.write_srgb_png for viewing; write_exr keeps it linear).")
+      .def_property_readonly(
+          "alpha", [](std::shared_ptr<Film> f) { return wrap(f, f->alpha, {f->height, f->width}); },
+          "H x W float32 coverage: the fraction of a pixel's samples whose camera ray hit a surface.")
+      .def_property_readonly(
+          "depth", [](std::shared_ptr<Film> f) { return wrap(f, f->depth, {f->height, f->width}); },
+          "H x W float32 camera-space z of the first hit at the pixel centre, metres (+inf: background).")
+      .def_property_readonly(
+          "distance", [](std::shared_ptr<Film> f) { return wrap(f, f->distance, {f->height, f->width}); },
+          "H x W float32 distance along the pixel-centre ray to the first hit, metres (+inf: background).")
+      .def_property_readonly(
+          "normal", [](std::shared_ptr<Film> f) { return wrap(f, f->normal, {f->height, f->width, 3}); },
+          "H x W x 3 float32 world-space shading normal of the first hit (0 on background).")
+      .def_property_readonly(
+          "albedo", [](std::shared_ptr<Film> f) { return wrap(f, f->albedo, {f->height, f->width, 3}); },
+          "H x W x 3 float32 albedo of the first hit (linear; 0 on background).")
+      .def_property_readonly(
+          "instance_id", [](std::shared_ptr<Film> f) { return wrap(f, f->instance_id, {f->height, f->width}); },
+          "H x W uint32 instance id of the first hit at the pixel centre (0: background).")
+      .def_property_readonly(
+          "class_id", [](std::shared_ptr<Film> f) { return wrap(f, f->class_id, {f->height, f->width}); },
+          "H x W uint32 class id of the first hit at the pixel centre (0: background).")
+      .def_property_readonly(
+          "stats", [](std::shared_ptr<Film> f) { return stats_to_dict(f->stats); },
+          "Render statistics: timings, rays, samples, BVH builds of the last commit, ...");
 
   py::class_<Scene>(m, "Scene", R"doc(Integration API: typed libraries with stable integer ids.
 

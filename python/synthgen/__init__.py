@@ -33,6 +33,17 @@ from ._core import (  # noqa: F401
     read_image,
 )
 from .schema.errors import SceneFileError  # noqa: F401
+
+
+def _srgb8(self: RenderResult):
+    """H x W x 3 uint8 sRGB-encoded image of :attr:`rgb` (IEC 61966-2-1, clipped to [0, 1]),
+    for viewing; :attr:`rgb` itself is linear radiance."""
+    from .outputs.files import to_srgb8
+
+    return to_srgb8(self.rgb)
+
+
+RenderResult.srgb8 = _srgb8
 from .scene import primitives, wear  # noqa: F401
 from .scene.scene_file import build_scene, load_scene  # noqa: F401
 

@@ -119,6 +119,9 @@ class FrameRenderer:
             "objects": object_records(objects, keep, layout.dropped, amodal, arrays["instance_id"], camera,
                                       sc.class_names),
             "sampled": spec.sampled, "class_names": list(sc.class_names),
+            # What this frame shares with others, for the train/val split (outputs.split): its
+            # layout is its own (every frame draws a new one).
+            "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
         }
         if spec.post:
             meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]

@@ -7,17 +7,20 @@ A dataset directory (frame k is ``{k:06d}``)::
     depth16/000000.png       uint16 millimetres, 0 = no surface or beyond 65.535 m (depth16)
     instance/000000.png      uint16 instance ids (1..N per frame, 0 = background/ground)
     semantic/000000.png      uint16 class ids (1 + index in the scenario's class list)
-    labels/000000.txt        YOLO; dataset.yaml names the classes (yolo)
+    labels/000000.txt        YOLO; dataset.yaml names the classes and the split's lists (yolo)
     kitti/000000.txt         KITTI 2D labels (+ 3D fields in the camera frame) (kitti)
     meta/000000.json         seed, every sampled parameter, objects (boxes, occlusion,
                              truncation, pose), the frame's COCO records; written last
-    annotations/coco.json    assembled from meta/*.json at the end of a run (coco)
+    annotations/coco.json    assembled from meta/*.json at the end of a run (coco), and
+                             coco_train.json, coco_val.json, coco_test.json: the split
+    splits/train.txt, ...    the train / val / test split (:mod:`.split`): image lists and
+                             splits.json; frames sharing a photo or a layout stay together
 
 One module per format registers its output kinds (:mod:`.registry`): ``images`` (rgb,
 rgb_exr), ``depth`` (depth, depth16), ``masks`` (instance, semantic), ``coco``, ``yolo``,
 ``kitti``, ``meta``. Adding a format is one module here (found by :func:`discover`) plus its
 test. Infrastructure: :mod:`.registry`, :mod:`.files` (atomic writers), :mod:`.render` (the
-files of ``synthgen render``), :mod:`.verify` (``synthgen verify``).
+files of ``synthgen render``), :mod:`.verify` (``synthgen verify``), :mod:`.split` (the split).
 """
 from __future__ import annotations
 
@@ -29,7 +32,7 @@ from .registry import (Frame, OutputKind, default_outputs, finalize_dataset, fra
                        kind_names, kinds, register, write_frame)
 
 #: Modules of this package that are not output formats.
-INFRASTRUCTURE = ("registry", "files", "render", "verify")
+INFRASTRUCTURE = ("registry", "files", "render", "verify", "split")
 
 
 def format_modules() -> List[str]:

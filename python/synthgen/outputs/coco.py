@@ -205,17 +205,29 @@ def frame_record(frame: Frame) -> Dict[str, Any]:
 
 
 def assemble_coco(out_dir: str, class_names: Sequence[str], frames: Iterable[int]) -> str:
-    """annotations/coco.json from the per-frame records in meta/*.json."""
-    images, anns = [], []
+    """annotations/coco.json from the per-frame records in meta/*.json, and one file per
+    split (coco_train.json, coco_val.json, coco_test.json when not empty; synthgen.outputs.split)."""
+    from .split import SPLITS, read_splits
+
+    records = {}
     for k in sorted(frames):
         with open(os.path.join(out_dir, "meta", frame_name(k) + ".json"), encoding="utf-8") as f:
-            meta = json.load(f)
-        images.append(meta["coco"]["image"])
-        anns.extend(meta["coco"]["annotations"])
-    ds = coco_dataset(images, anns, class_names, info={"description": "synthgen dataset", "version": "1"})
-    path = os.path.join(out_dir, "annotations", "coco.json")
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    return write_json(path, ds)
+            records[k] = json.load(f)["coco"]
+    info = {"description": "synthgen dataset", "version": "1"}
+
+    def write(name: str, keys: Sequence[int]) -> str:
+        images = [records[k]["image"] for k in keys]
+        anns = [a for k in keys for a in records[k]["annotations"]]
+        path = os.path.join(out_dir, "annotations", name)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        return write_json(path, coco_dataset(images, anns, class_names, info=info))
+
+    splits = read_splits(out_dir)
+    for s in SPLITS:
+        keys = [k for k in records if splits.get(k) == s]
+        if keys:
+            write(f"coco_{s}.json", keys)
+    return write("coco.json", list(records))
 
 
 register(OutputKind("coco", "COCO instance annotations (RLE masks, occlusion, truncation): annotations/coco.json",

@@ -46,10 +46,21 @@ def write_yolo(path: str, frame: Frame) -> str:
 
 
 def write_yolo_dataset_yaml(out_dir: str, class_names: Sequence[str], frames: Sequence[int] = ()) -> str:
+    """dataset.yaml: the image lists of the split (splits/*.txt, :mod:`synthgen.outputs.split`)
+    and the class names; without a split (a dataset of an older run), every image for both."""
     import yaml
 
-    text = yaml.safe_dump({"path": os.path.abspath(out_dir), "train": "images", "val": "images",
-                           "names": {i: n for i, n in enumerate(class_names)}}, sort_keys=False)
+    lists = {s: f"splits/{s}.txt" for s in ("train", "val", "test")
+             if os.path.exists(os.path.join(out_dir, "splits", f"{s}.txt"))}
+    doc: dict = {"path": os.path.abspath(out_dir)}
+    if lists:
+        doc.update({"train": lists["train"], "val": lists["val"]})
+        if os.path.getsize(os.path.join(out_dir, lists["test"])) > 0:
+            doc["test"] = lists["test"]
+    else:
+        doc.update({"train": "images", "val": "images"})
+    doc["names"] = {i: n for i, n in enumerate(class_names)}
+    text = yaml.safe_dump(doc, sort_keys=False)
     return write_text(os.path.join(out_dir, "dataset.yaml"), text)
 
 

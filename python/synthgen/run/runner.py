@@ -17,7 +17,8 @@ from typing import Any, Dict, List, Optional, Sequence
 from .. import outputs
 from .._core import SynthgenError
 from ..outputs.files import write_json
-from ..outputs.meta import completed_frames, frame_status
+from ..outputs import split
+from ..outputs.meta import completed_frames, frame_status, read_meta
 from ..outputs.registry import frame_name
 from .manifest import build_manifest, check_manifest, write_manifest
 from ..scenario import check_inputs, load_scenario
@@ -140,8 +141,11 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
             executor.shutdown()
     wall = time.perf_counter() - t0
     complete = completed_frames(out_dir)
-    outputs.finalize_dataset(out_dir, sc.spec["outputs"], sc.class_names,
-                             [k for k in complete if k < n or only is not None])
+    finished = [k for k in complete if k < n or only is not None]
+    sp = sc.spec["split"]
+    split.write_splits(out_dir, [read_meta(os.path.join(out_dir, "meta", frame_name(k) + ".json")) for k in finished],
+                       sc.seed, sp["val"], sp["test"])
+    outputs.finalize_dataset(out_dir, sc.spec["outputs"], sc.class_names, finished)
     stages: Dict[str, float] = {}
     for r in results:
         for k, v in r["timings"].items():

@@ -124,6 +124,10 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
                       f"max_visible_fraction {hi} < min_visible_fraction {lo}")
     if pl["max_visible_fraction"] < pl["min_visible_fraction"]:
         ctx.error(pl.locs.get("max_visible_fraction", pl.loc), "max_visible_fraction must be >= min_visible_fraction")
+    sp = spec["split"]
+    if sp["val"] + sp["test"] > 1.0:
+        ctx.error(sp.locs.get("test", sp.locs.get("val", sp.loc)),
+                  f"val + test = {sp['val'] + sp['test']:g} leaves no frames for train (at most 1)")
     x0, z0, x1, z1 = spec["placement"]["region"]
     if not (x0 < x1 and z0 < z1):
         ctx.error(spec["placement"].locs.get("region", spec.loc), "region must satisfy x_min < x_max and z_min < z_max")

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from .. import outputs, post, randomize
+from ..outputs import split
 from ..schema.errors import Loc, ValidationContext, show_value
 from ..schema.fields import (EMPTY, REQUIRED, Bool, Choice, Field, FilePath, Integer, ListOf, Number, Record, String,
                              Vector)
@@ -128,5 +129,6 @@ SCENARIO_SCHEMA = Record(
      "placement": PLACEMENT,
      "render": RENDER,
      "outputs": ListOf(Choice(outputs.kind_names()), outputs.default_outputs(), doc="what to write"),
+     "split": split.SCHEMA,
      "post": ListOf(POST_STEP, [], doc="image-space steps applied to each frame's image, in order")},
     doc="a scenario")
