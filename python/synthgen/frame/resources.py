@@ -44,7 +44,7 @@ class Shapes:
         self._shapes: Dict[Tuple[str, Any], Shape] = {}
 
     def get(self, kind: str, value: Any) -> Shape:
-        """The shape of ``(kind, value)``: ("primitive", "box" | "sphere"), ("mesh", path),
+        """The shape of ``(kind, value)``: ("primitive", "box" | "sphere" | "cylinder" | "cone"), ("mesh", path),
         ("asset", id) or (randomizer key, sampled value) of a shape randomizer."""
         key = (kind, value) if kind in ("primitive", "mesh", "asset") else (kind, None)
         if key not in self._shapes:
@@ -69,7 +69,9 @@ class Shapes:
             distinct = tuple(int(i) for i in np.unique(ids)) if ids.size else (-1,)
             return Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
         if kind == "primitive":
-            m = P.box((1.0, 1.0, 1.0)) if value == "box" else P.uv_sphere(0.5, 48, 24)
+            # Unit shapes (1 m across, centred), sized per object by scaling.
+            m = {"box": lambda: P.box((1.0, 1.0, 1.0)), "sphere": lambda: P.uv_sphere(0.5, 48, 24),
+                 "cylinder": lambda: P.cylinder(0.5, 1.0, 48), "cone": lambda: P.cone(0.5, 1.0, 48)}[value]()
             mid = scene.add_mesh(m["positions"], m["indices"], normals=m["normals"], uvs=m["uvs"], name=value)
             return Shape(mid, np.full(3, -0.5), np.full(3, 0.5), False)
         mid, lo, hi = randomize.randomizer(kind).make_shape(scene)

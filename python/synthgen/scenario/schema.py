@@ -57,11 +57,15 @@ OBJECT = Record(
     {"class": String(REQUIRED, doc="class name (COCO category, YOLO class, KITTI type)"),
      "name": String(None, doc="label for messages and metadata"),
      "count": R(Integer(1, min=0, max=1000, doc="instances per frame")),
-     "primitive": R(Choice(["box", "sphere"], None, doc="built-in shape")),
+     "primitive": R(Choice(["box", "sphere", "cylinder", "cone"], None,
+                           doc="built-in shape, 1 m across before size: box, sphere, cylinder or cone (about y, "
+                               "the cone's apex up)")),
      "mesh": FilePath(None, doc="mesh file (OBJ, PLY, glTF, GLB)"),
      "asset": R(String(None, doc="asset id of assets_manifest (kind mesh; `synthgen assets list`)")),
      "size": R(Vector(3, (1.0, 1.0, 1.0), min=0.0, min_open=True, broadcast=True,
-                      doc="box size or sphere diameter, metres")),
+                      doc="primitives: extent along x, y, z in metres (a sphere: its diameter, the first value; "
+                          "a cylinder or cone: diameter, height, diameter); meshes and assets: per-axis scale of "
+                          "the model's own size")),
      "scale": R(Number(1.0, min=0.0, min_open=True, doc="uniform scale of the shape")),
      "yaw": R(Number(0.0, min=-360.0, max=720.0, doc="rotation about +y, degrees")),
      "forward": Choice(list(AXES), None, doc="the model's forward axis (default: the asset's, else +x): KITTI "

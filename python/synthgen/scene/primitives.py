@@ -100,6 +100,77 @@ def uv_sphere(radius: float = 1.0, segments: int = 64, rings: int = 32) -> dict:
     return _mesh(n * radius, idx, n, uv)
 
 
+def _revolution(profile, segments: int, cap_bottom: bool, cap_top: bool) -> dict:
+    """A closed solid of revolution about the y axis from a side ``profile``: rows of
+    (radius, y, normal_radial, normal_y) -- two rows per flat band so normals do not blend
+    across an edge; flat caps (radius > 0 at the bottom / top row) with their own vertices."""
+    if segments < 3:
+        raise ValueError("need segments >= 3")
+    phi = np.linspace(0.0, 2.0 * np.pi, segments + 1)
+    c, s_ = np.cos(phi), -np.sin(phi)  # as uv_sphere: u grows counter-clockwise seen from +y
+    P, N, UV, I = [], [], [], []
+    w = segments + 1
+    prof = np.asarray(profile, np.float64)
+    ys = prof[:, 1]
+    v_of = (ys - ys.min()) / max(ys.max() - ys.min(), 1e-12)
+    for r, y, nr, ny in prof:
+        for k in range(w):
+            P.append([r * c[k], y, r * s_[k]])
+            N.append([nr * c[k], ny, nr * s_[k]])
+            UV.append([phi[k] / (2 * np.pi), 0.0])
+    for i, v in enumerate(v_of):
+        for k in range(w):
+            UV[i * w + k][1] = v
+    for i in range(len(prof) - 1):
+        if prof[i, 1] == prof[i + 1, 1] and prof[i, 0] == prof[i + 1, 0]:
+            continue  # the two rows of one crease: no band between them
+        for k in range(segments):
+            a, b, cc, d = i * w + k, i * w + k + 1, (i + 1) * w + k + 1, (i + 1) * w + k
+            # Rows run upwards: (a, b, d) is counter-clockwise seen from outside; a row of
+            # radius 0 (an apex) gets no degenerate triangle.
+            if prof[i, 0] > 0:
+                I.append([a, b, d])
+            if prof[i + 1, 0] > 0:
+                I.append([b, cc, d])
+    for cap, row, ny in ((cap_bottom, 0, -1.0), (cap_top, len(prof) - 1, 1.0)):
+        r, y = prof[row, 0], prof[row, 1]
+        if not cap or r <= 0:
+            continue
+        centre = len(P)
+        P.append([0.0, y, 0.0])
+        N.append([0.0, ny, 0.0])
+        UV.append([0.5, 0.5])
+        for k in range(segments):
+            P.append([r * c[k], y, r * s_[k]])
+            N.append([0.0, ny, 0.0])
+            UV.append([0.5 + 0.5 * c[k], 0.5 + 0.5 * s_[k]])
+        for k in range(segments):
+            a, b = centre + 1 + k, centre + 1 + (k + 1) % segments
+            I.append([centre, b, a] if ny < 0 else [centre, a, b])
+    return _mesh(P, I, N, UV)
+
+
+def cylinder(radius: float = 0.5, height: float = 1.0, segments: int = 64) -> dict:
+    """Closed cylinder about the y axis, centred at the origin (y in [-h/2, h/2]): smooth
+    side normals, flat caps."""
+    r, h = float(radius), 0.5 * float(height)
+    if r <= 0 or h <= 0:
+        raise ValueError("cylinder: radius and height must be positive")
+    return _revolution([(r, -h, 1.0, 0.0), (r, h, 1.0, 0.0)], segments, True, True)
+
+
+def cone(radius: float = 0.5, height: float = 1.0, segments: int = 64) -> dict:
+    """Closed cone about the y axis, centred at the origin (base disc at y = -h/2, apex at
+    y = h/2): side normals of the slanted surface (the apex gets one vertex per segment, so
+    its normals stay slanted), a flat base."""
+    r, hh = float(radius), float(height)
+    if r <= 0 or hh <= 0:
+        raise ValueError("cone: radius and height must be positive")
+    length = np.hypot(r, hh)
+    nr, ny = hh / length, r / length  # outward normal of the slanted side
+    return _revolution([(r, -0.5 * hh, nr, ny), (0.0, 0.5 * hh, nr, ny)], segments, True, False)
+
+
 def translate(t) -> np.ndarray:
     m = np.eye(4, dtype=np.float32)
     m[:3, 3] = t

@@ -110,7 +110,7 @@ MESH_FILE = Record({
 OBJECT = Record({
     "name": String(None, doc="free name, reported in meta.json"),
     "mesh": MESH_FILE,
-    "primitive": Choice(["sphere", "box", "plane", "ground"], doc="built-in procedural mesh"),
+    "primitive": Choice(["sphere", "box", "cylinder", "cone", "plane", "ground"], doc="built-in procedural mesh"),
     "class_id": Integer(min=0, max=_ID_MAX, doc="semantic class label (0 is also the background)"),
     "instance_id": Integer(None, min=1, max=_ID_MAX, doc="instance label (default: instance handle + 1)"),
     "material": String(None, doc="name of a material under 'materials' (default: the mesh's own)"),
@@ -128,6 +128,16 @@ OBJECT = Record({
     "box": {
         "size": Vector(3, (1.0, 1.0, 1.0), min=0, min_open=True, broadcast=True,
                        doc="edge lengths along x, y, z (centred at the origin)"),
+    },
+    "cylinder": {
+        "radius": Number(0.5, min=0, min_open=True, doc="radius"),
+        "height": Number(1.0, min=0, min_open=True, doc="height along y (centred at the origin)"),
+        "segments": Integer(64, min=3, max=4096, doc="subdivisions around the y axis"),
+    },
+    "cone": {
+        "radius": Number(0.5, min=0, min_open=True, doc="radius of the base"),
+        "height": Number(1.0, min=0, min_open=True, doc="height along y: base at -height/2, apex at +height/2"),
+        "segments": Integer(64, min=3, max=4096, doc="subdivisions around the y axis"),
     },
     "plane": {
         "size": Vector(2, (1.0, 1.0), min=0, min_open=True, broadcast=True,
@@ -250,6 +260,10 @@ def _primitive_mesh(obj: Validated) -> Tuple[tuple, Dict[str, np.ndarray], np.nd
                 np.array([obj["radius"]] * 3))
     if kind == "box":
         return (kind,), primitives.box((1.0, 1.0, 1.0)), np.array(obj["size"])
+    if kind in ("cylinder", "cone"):
+        unit = primitives.cylinder if kind == "cylinder" else primitives.cone
+        r, h = obj["radius"], obj["height"]
+        return (kind, obj["segments"]), unit(1.0, 1.0, obj["segments"]), np.array([r, h, r])
     if kind == "ground":
         return (kind, obj["radius"]), primitives.ground(obj["radius"]), np.ones(3)
     sx, sz = obj["size"]
