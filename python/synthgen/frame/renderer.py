@@ -107,7 +107,8 @@ class FrameRenderer:
         t_render = time.perf_counter()
 
         arrays = {"rgb": np.asarray(res.rgb), "depth": np.asarray(res.depth),
-                  "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id)}
+                  "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id),
+                  "normal": np.asarray(res.normal), "albedo": np.asarray(res.albedo)}
         if spec.post:
             arrays = post.apply_steps(arrays, [(p.type, p.params) for p in spec.post])
         meta = {

@@ -7,6 +7,8 @@ A dataset directory (frame k is ``{k:06d}``)::
     depth16/000000.png       uint16 millimetres, 0 = no surface or beyond 65.535 m (depth16)
     instance/000000.png      uint16 instance ids (1..N per frame, 0 = background/ground)
     semantic/000000.png      uint16 class ids (1 + index in the scenario's class list)
+    normal/000000.exr        shading normals in the camera frame, float32 (normal)
+    albedo/000000.exr        albedo of the first hit, linear float32 (albedo)
     labels/000000.txt        YOLO; dataset.yaml names the classes and the split's lists (yolo)
     kitti/000000.txt         KITTI 2D labels (+ 3D fields in the camera frame) (kitti)
     meta/000000.json         seed, every sampled parameter, objects (boxes, occlusion,
@@ -17,8 +19,8 @@ A dataset directory (frame k is ``{k:06d}``)::
                              splits.json; frames sharing a photo or a layout stay together
 
 One module per format registers its output kinds (:mod:`.registry`): ``images`` (rgb,
-rgb_exr), ``depth`` (depth, depth16), ``masks`` (instance, semantic), ``coco``, ``yolo``,
-``kitti``, ``meta``. Adding a format is one module here (found by :func:`discover`) plus its
+rgb_exr), ``depth`` (depth, depth16), ``masks`` (instance, semantic), ``surface`` (normal,
+albedo), ``coco``, ``yolo``, ``kitti``, ``meta``. Adding a format is one module here (found by :func:`discover`) plus its
 test. Infrastructure: :mod:`.registry`, :mod:`.files` (atomic writers), :mod:`.render` (the
 files of ``synthgen render``), :mod:`.verify` (``synthgen verify``), :mod:`.split` (the split).
 """
