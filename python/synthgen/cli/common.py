@@ -52,6 +52,51 @@ def add_render_options(p: argparse.ArgumentParser) -> None:
         g.add_argument(flag, type=type_, metavar=metavar, help=f"{q['doc']} (default: the scene's, else {q['default']})")
 
 
+def resolution(text: str) -> list:
+    w, sep, h = text.lower().partition("x")
+    try:
+        v = [int(w), int(h)]
+    except ValueError:
+        v = []
+    if not sep or len(v) != 2 or min(v) < 1:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT in pixels (e.g. 640x480), got {text!r}")
+    return v
+
+
+def add_scenario_overrides(p: argparse.ArgumentParser) -> None:
+    """Options that change a scenario's values before validation (they become part of it: the
+    run manifest refuses to resume a directory made with other values)."""
+    g = p.add_argument_group("scenario overrides (applied before validation, recorded in the run manifest)")
+    declared = {q["name"]: q for q in plugin_info("render", "path_tracer")["params"]}
+    for flag, name, metavar, type_ in RENDER_OPTIONS:
+        if name == "seed":
+            continue
+        q = declared[name]
+        g.add_argument(flag, type=type_, metavar=metavar, help=f"render.{name}: {q['doc']}")
+    g.add_argument("--resolution", type=resolution, metavar="WxH", help="resolution: image size in pixels")
+    g.add_argument("--seed", type=nonnegative_int, metavar="S", help="seed: the scenario's seed")
+    g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="any scenario key, VALUE in YAML, e.g. --set objects[0].count=3 --set "
+                        "'camera.fov_y={uniform: [40, 60]}' (repeatable)")
+
+
+def scenario_overrides(args: argparse.Namespace) -> list:
+    """(key path, value) pairs of the scenario override options, in order: --set last."""
+    from ..scenario.load import parse_override
+
+    out: list = []
+    for flag, name, _, _ in RENDER_OPTIONS:
+        v = getattr(args, name, None)
+        if name != "seed" and v is not None:
+            out.append((f"render.{name}", v))
+    if getattr(args, "resolution", None) is not None:
+        out.append(("resolution", args.resolution))
+    if getattr(args, "seed", None) is not None:
+        out.append(("seed", args.seed))
+    out.extend(parse_override(t) for t in getattr(args, "set", []) or [])
+    return out
+
+
 def debug_option(p: argparse.ArgumentParser, top: bool) -> None:
     # On sub-commands the default is SUPPRESS so that `synthgen --debug render ...` is
     # not overwritten by the sub-command's default.

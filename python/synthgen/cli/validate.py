@@ -4,16 +4,18 @@ from __future__ import annotations
 import argparse
 
 from . import Command, register
+from .common import add_scenario_overrides, scenario_overrides
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", metavar="SCENARIO.yaml")
+    add_scenario_overrides(p)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..scenario import check_inputs, load_scenario
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, scenario_overrides(args))
     checked = check_inputs(sc)
     files = ", ".join(f"{n} {k}{'s' if n != 1 else ''}" for k, n in sorted(checked.items())) or "no input files"
     print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "

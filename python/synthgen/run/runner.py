@@ -12,7 +12,7 @@ from __future__ import annotations
 import glob
 import os
 import time
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from .. import outputs
 from .._core import SynthgenError
@@ -78,9 +78,11 @@ class RunSummary(dict):
 
 def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: int = 1,
         scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
-        recycle: int = 200, progress: bool = True, threads: Optional[int] = None) -> RunSummary:
-    """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`)."""
-    sc = load_scenario(scenario_path)  # validate before anything renders ...
+        recycle: int = 200, progress: bool = True, threads: Optional[int] = None,
+        overrides: Sequence[Tuple[str, Any]] = ()) -> RunSummary:
+    """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`); ``overrides``:
+    (key path, value) pairs set in the scenario before validation (``--set``)."""
+    sc = load_scenario(scenario_path, overrides)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once
     n = int(count) if count is not None else sc.count
     if scheduler is None:  # local workers share this machine's memory

@@ -8,7 +8,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from typing import Any, List, Optional, Tuple
+import re
+from typing import Any, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -141,9 +142,81 @@ def parse_scenario(data: Any, source: str = "<scenario>", base_dir: Optional[str
     return Scenario(spec, source, ctx.base_dir, text or json.dumps(D.plain(spec), sort_keys=True))
 
 
-def load_scenario(path: str | os.PathLike) -> Scenario:
-    """Reads and validates a scenario file; raises :class:`SceneFileError` (file:line:col)."""
+_STEP = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
+
+
+def parse_override(text: str) -> Tuple[str, Any]:
+    """``KEY.PATH=VALUE`` (the command line's ``--set``) as (path, value); VALUE is YAML
+    (``64``, ``[320, 240]``, ``{uniform: [1, 2]}``). SceneFileError when malformed."""
+    key, sep, value = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise SceneFileError("--set", None, None, "", f"expected KEY.PATH=VALUE, got {text!r}")
+    for part in key.split("."):
+        if not _STEP.fullmatch(part):
+            raise SceneFileError("--set", None, None, "", f"{key!r}: not a key path (keys separated by '.', list "
+                                                          f"items as [N], e.g. objects[0].count)")
+    return key, parse_yaml(value, f"--set {key}")
+
+
+def apply_overrides(data: Any, overrides: Sequence[Tuple[str, Any]], source: str) -> Any:
+    """The tree with each (key path, value) set, creating mappings on the way; a list item
+    must exist. The values carry no file position (errors name the key path)."""
+    from ..schema.yaml_io import MarkedDict
+
+    if data is None:
+        data = MarkedDict()
+    if not isinstance(data, dict):
+        raise SceneFileError(source, None, None, "", "the scenario must be a mapping to take --set values")
+    for key, value in overrides:
+        node: Any = data
+        steps: List[Any] = []
+        for part in key.split("."):
+            m = _STEP.fullmatch(part)
+            steps.append(m.group(1))
+            steps.extend(int(i) for i in re.findall(r"\[(\d+)\]", m.group(2)))
+        for i, step in enumerate(steps[:-1]):
+            if isinstance(step, int):
+                if not isinstance(node, list) or step >= len(node):
+                    raise SceneFileError(source, None, None, key, f"--set: there is no item {step} here")
+                node = node[step]
+            else:
+                if not isinstance(node, dict):
+                    raise SceneFileError(source, None, None, key, f"--set: '{step}' is not inside a mapping")
+                if node.get(step) is None:
+                    node[step] = MarkedDict() if isinstance(steps[i + 1], str) else []
+                node = node[step]
+        last = steps[-1]
+        if isinstance(last, int):
+            if not isinstance(node, list) or last >= len(node):
+                raise SceneFileError(source, None, None, key, f"--set: there is no item {last} here")
+        elif not isinstance(node, dict):
+            raise SceneFileError(source, None, None, key, f"--set: '{last}' is not inside a mapping")
+        node[last] = value
+        if isinstance(node, MarkedDict):
+            node.key_marks.pop(last, None)
+            node.value_marks.pop(last, None)
+    return data
+
+
+def load_scenario(path: str | os.PathLike, overrides: Sequence[Tuple[str, Any]] = ()) -> Scenario:
+    """Reads and validates a scenario file; raises :class:`SceneFileError` (file:line:col).
+
+    ``overrides``: (key path, value) pairs set before validation, e.g. ``("render.spp", 64)``
+    (the command line's ``--set``, ``--spp``, ``--resolution``); they are part of the scenario
+    (its hash, the run manifest)."""
     path = os.fspath(path)
     text = read_text(path, what="scenario")
     data = parse_yaml(text, path)
-    return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text)
+    if not overrides:
+        return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text)
+    data = apply_overrides(data, overrides, path)
+    text += "".join(f"\n# --set {k}={json.dumps(D.plain(v), sort_keys=True)}" for k, v in overrides)
+    try:
+        return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text)
+    except SceneFileError as e:
+        # An error in a value from the command line names the option, not a line of the file.
+        for k, _ in reversed(list(overrides)):
+            if e.key_path == k or e.key_path.startswith((k + ".", k + "[")):
+                raise SceneFileError(f"{path} (--set {k})", None, None, e.key_path, e.reason) from None
+        raise
