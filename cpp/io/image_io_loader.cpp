@@ -54,7 +54,24 @@ const ImageIoApi& api() {
 
 void load_image_plugin() { api(); }
 
+namespace {
+
+/// A file a reader may open: it exists and is a regular file (a directory sent libheif,
+/// through OpenImageIO's format probing, into an endless allocation; a FIFO or a device
+/// would block or never end). Found by fuzz_plugin_params.
+void check_regular_file(const std::string& path, const char* what) {
+  std::error_code ec;
+  auto st = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(st)) throw FileError(path, "file not found");
+  if (std::filesystem::is_directory(st)) throw FileError(path, std::string("is a directory, not ") + what);
+  if (!std::filesystem::is_regular_file(st))
+    throw FileError(path, std::string("is not a regular file (a device, FIFO or socket), not ") + what);
+}
+
+}  // namespace
+
 ImageData load_image_in_process(const std::string& path, ColorSpace space) {
+  check_regular_file(path, "an image");
   ImageData img;
   std::string err;
   if (!api().load(path.c_str(), int(space), &img, &err)) throw FileError(path, err);
@@ -87,6 +104,7 @@ std::vector<char> load_image_bytes(const std::string& path, ColorSpace space) {
 }
 
 ImageData load_image(const std::string& path, ColorSpace space) {
+  check_regular_file(path, "an image");
   const char* names[] = {"auto", "srgb", "linear"};
   Bytes bytes =
       read_isolated(path, {"image", path, names[int(space)]}, [&] { return load_image_bytes(path, space); });

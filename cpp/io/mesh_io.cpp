@@ -238,23 +238,56 @@ static std::string diagnose_unreadable(const std::string& path) {
   return "";
 }
 
+/// The raw meshes of a reader, before assimp's post-processing sees them: arrays present,
+/// every face with 1 to 2^16 indices inside its mesh's vertices.
+static void check_raw_scene(const aiScene& scene, const std::string& path) {
+  if (scene.mNumMeshes && !scene.mMeshes) throw FileError(path, "the reader produced no mesh array");
+  for (unsigned i = 0; i < scene.mNumMeshes; ++i) {
+    const aiMesh* m = scene.mMeshes[i];
+    const std::string where = "mesh " + std::to_string(i);
+    if (!m) throw FileError(path, where + " is missing");
+    if ((m->mNumVertices && !m->mVertices) || (m->mNumFaces && !m->mFaces))
+      throw FileError(path, where + " declares vertices or faces it does not have");
+    for (unsigned f = 0; f < m->mNumFaces; ++f) {
+      const aiFace& face = m->mFaces[f];
+      if (face.mNumIndices == 0 || face.mNumIndices > (1u << 16) || !face.mIndices)
+        throw FileError(path, where + ", face " + std::to_string(f) + ": " + std::to_string(face.mNumIndices) +
+                                  " vertex indices (a face has 1 to 65536)");
+      for (unsigned k = 0; k < face.mNumIndices; ++k)
+        if (face.mIndices[k] >= m->mNumVertices)
+          throw FileError(path, where + ", face " + std::to_string(f) + ": vertex index " +
+                                    std::to_string(face.mIndices[k]) + " out of range (" +
+                                    std::to_string(m->mNumVertices) + " vertices)");
+    }
+  }
+}
+
 ImportedModel import_mesh_file(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw FileError(path, "file not found");
   if (fs::is_directory(path, ec)) throw FileError(path, "is a directory, not a mesh file");
+  if (!fs::is_regular_file(path, ec))
+    throw FileError(path, "is not a regular file (a device, FIFO or socket), not a mesh file");
   check_obj_vertices(path);
   check_ply_header(path);
   check_glb_header(path);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_JoinIdenticalVertices |
-                aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+  // Read without post-processing, check what the reader made, then post-process: assimp's
+  // steps assert (abort) on data its readers let through (a PLY face of 0 indices aborts
+  // the triangulation; found by fuzz_mesh_import).
+  const aiScene* scene = importer.ReadFile(path, 0);
   if (!scene) {
     std::string why = diagnose_unreadable(path);
     throw FileError(path, "cannot import mesh: " + (why.empty() ? std::string(importer.GetErrorString()) : why));
   }
   if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) throw FileError(path, "incomplete scene (the importer gave up)");
+  check_raw_scene(*scene, path);
+  scene = importer.ApplyPostProcessing(aiProcess_ValidateDataStructure);
+  if (scene)
+    scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices |
+                                         aiProcess_JoinIdenticalVertices | aiProcess_SortByPType);
+  if (!scene) throw FileError(path, "cannot import mesh: " + std::string(importer.GetErrorString()));
 
   ImportedModel model;
   model.mesh.name = fs::path(path).filename().string();

@@ -200,6 +200,23 @@ TEST(isolate, ply_headers_that_loop_assimp_are_refused) {
   EXPECT_NO_THROW(s.load_mesh_file(temp_file("ok.ply", ok)));
 }
 
+TEST(isolate, only_regular_files_reach_the_readers) {
+  // A directory sent libheif (OpenImageIO's format probing) into an endless allocation; a
+  // device or FIFO would never end. Found by fuzz_plugin_params (an envmap file "/").
+  EXPECT_EQ(message_of([] { load_image("/", ColorSpace::Auto); }), "/: is a directory, not an image");
+  EXPECT_EQ(message_of([] { load_image("/dev/zero", ColorSpace::Auto); }),
+            "/dev/zero: is not a regular file (a device, FIFO or socket), not an image");
+  Scene s;
+  EXPECT_EQ(message_of([&] { s.load_mesh_file("/dev/zero"); }),
+            "/dev/zero: is not a regular file (a device, FIFO or socket), not a mesh file");
+  // A PLY face of 0 indices aborted assimp's triangulation (found by fuzz_mesh_import).
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n0\n";
+  EXPECT_EQ(message_of([&] { s.load_mesh_file(temp_file("empty_face.ply", ply)); }).substr(0, 1000).find(
+                "mesh 0, face 1: 0 vertex indices (a face has 1 to 65536)") != std::string::npos,
+            true);
+}
+
 TEST(isolate, image_loading_runs_isolated_and_reports_the_file) {
   std::string path = temp_file("broken.png", std::string("\x89PNG\r\n\x1a\n", 8) + std::string(40, 'x'));
   std::string m = message_of([&] { load_image(path, ColorSpace::Auto); });

@@ -61,8 +61,9 @@ def test_shipped_scenarios_validate():
     ("objects:\n  - {class: a, primitive: box, count: {uniform: [1, 3]}}\n", 2, 49, "objects[0].count.uniform",
      ["{int: [low, high]}"]),
     # bad choice value
-    ("objects:\n  - {class: a, primitive: cone}\n", 2, 27, "objects[0].primitive", ["unknown value 'cone'",
-                                                                                  "box, sphere"]),
+    ("objects:\n  - {class: a, primitive: cones}\n", 2, 27, "objects[0].primitive", ["unknown value 'cones'",
+                                                                                   "box, sphere, cylinder, cone",
+                                                                                   "did you mean 'cone'"]),
     # bad choice inside a choice distribution
     ("objects:\n  - {class: a, primitive: {choice: [box, sphre]}}\n", 2, 42, "objects[0].primitive.choice[1]",
      ["did you mean 'sphere'"]),

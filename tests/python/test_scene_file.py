@@ -119,13 +119,13 @@ def test_bad_values(tmp_path, snippet, path, fragment):
 def test_unknown_choice_suggests_and_lists_values(tmp_path):
     e = error_of(write(tmp_path, CAMERA + "objects: [{primitive: spere, class_id: 1}]\n"))
     assert e.key_path == "objects[0].primitive" and e.line == 2
-    assert "unknown value 'spere' (did you mean 'sphere'?); allowed values: sphere, box, plane" in str(e)
+    assert "unknown value 'spere' (did you mean 'sphere'?); allowed values: sphere, box, cylinder, cone, plane, ground" in str(e)
 
 
 def test_key_of_other_variant_is_explained(tmp_path):
     e = error_of(write(tmp_path, CAMERA + "objects: [{primitive: box, radius: 2, class_id: 1}]\n"))
     assert e.key_path == "objects[0].radius"
-    assert "not allowed with primitive 'box' (only with sphere, ground)" in str(e)
+    assert "not allowed with primitive 'box' (only with sphere, cylinder, cone, ground)" in str(e)
 
 
 def test_missing_required_key_points_at_the_entry(tmp_path):

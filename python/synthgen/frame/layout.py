@@ -124,8 +124,11 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
     """Tries layouts until every object meets the visibility criteria (or the retries run
     out); leaves the scene in the best layout found, every object shown or hidden."""
     objects = view.objects
-    limits = [{k: o.spec.limits.get(k, placement[k]) for k in ("min_pixels", "min_visible_fraction",
-                                                               "max_visible_fraction")} for o in objects]
+    # Unlabelled objects (label: false) may be hidden or cut by the image unless their entry
+    # sets limits: the placement's limits are for what gets labelled.
+    free = {"min_pixels": 0, "min_visible_fraction": 0.0, "max_visible_fraction": 1.0}
+    limits = [{k: o.spec.limits.get(k, placement[k] if o.spec.labelled else free[k])
+               for k in ("min_pixels", "min_visible_fraction", "max_visible_fraction")} for o in objects]
     need_amodal = any(li["min_visible_fraction"] > 0.0 or li["max_visible_fraction"] < 1.0 for li in limits)
     best = None
     attempts = 0
@@ -142,7 +145,7 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
         for k, spot in enumerate(spots):
             if spot is None:
                 fails.append((k, "no free spot in the placement region"))
-            elif counts[k + 1] < max(1, limits[k]["min_pixels"]):
+            elif counts[k + 1] < max(1 if objects[k].spec.labelled else 0, limits[k]["min_pixels"]):
                 fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {limits[k]['min_pixels']}"))
         if need_amodal and not fails:
             for k in range(len(objects)):

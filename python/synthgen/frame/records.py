@@ -99,6 +99,15 @@ def object_records(objects: Sequence[PlacedObject], keep: Sequence[bool], droppe
     out = []
     for k, o in enumerate(objects):
         s = o.spec
+        if not s.labelled:  # label: false: where it is, nothing else
+            rec = {"index": k, "label": False, "instance_id": 0, "class": None, "class_id": 0, "kind": s.kind}
+            rec.update(o.info)
+            if keep[k]:
+                rec["world_from_object"] = o.world.tolist()
+            else:
+                rec["dropped"] = dropped.get(k, "no free spot in the placement region")
+            out.append(rec)
+            continue
         rec: Dict[str, Any] = {"index": k, "instance_id": k + 1, "class": class_names[s.class_index],
                                "class_id": s.class_index + 1, "kind": s.kind}
         rec.update(o.info)

@@ -96,7 +96,12 @@ class FrameRenderer:
         keep = layout.kept()
         t_layout = time.perf_counter()
 
-        amodal = {k: amodal_pixels(view, camera, k) for k in range(len(objects)) if keep[k]}
+        # Unlabelled objects (label: false) keep their ids for the layout's checks, then become
+        # background in the labels: class 0, instance 0.
+        for o in objects:
+            if not o.spec.labelled:
+                self.scene.set_instance_labels(o.instance, 0, 0)
+        amodal = {k: amodal_pixels(view, camera, k) for k in range(len(objects)) if keep[k] and objects[k].spec.labelled}
         view.show(keep)
         self.scene.set_camera(camera)
         self.scene.commit()

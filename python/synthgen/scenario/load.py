@@ -35,7 +35,7 @@ class Scenario:
         self.sha256 = hashlib.sha256(text.encode()).hexdigest()
         names: List[str] = []
         for o in spec["objects"]:
-            if o["class"] not in names:
+            if o["label"] and o["class"] not in names:
                 names.append(o["class"])
         self.class_names = names
 
@@ -104,7 +104,14 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
     why = check_memory(w, h)
     if why:
         ctx.error(spec.locs.get("resolution", spec.loc), why)
+    if not any(o["label"] for o in spec["objects"]):
+        ctx.error(spec.locs.get("objects", spec.loc), "every object entry has label: false; a dataset needs at least "
+                                                      "one labelled entry")
     for i, o in enumerate(spec["objects"]):
+        if o["label"] and o["class"] is None:
+            ctx.error(o.loc, "missing key 'class' (the class name; or label: false for an unlabelled object)")
+        if not o["label"] and o["class"] is not None:
+            ctx.error(o.locs["class"], "an object with label: false has no class (remove 'class' or the label: false)")
         if o.get("forward") and o.get("up") and o["forward"][1] == o["up"][1]:
             ctx.error(o.locs["up"], f"forward ({o['forward']}) and up ({o['up']}) must be different axes")
         if "asset" in o.given:

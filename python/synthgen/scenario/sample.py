@@ -65,7 +65,7 @@ class ObjectSpec:
 
     index: int                  #: position in the frame (its instance id is index + 1)
     kind: int                   #: index of its entry in the scenario's ``objects``
-    class_index: int            #: index in the scenario's class list (class id = class_index + 1)
+    class_index: int            #: index in the scenario's class list (class id = class_index + 1); -1: unlabelled
     class_name: str
     name: Optional[str]
     shape: Tuple[str, Any]      #: ("primitive", "box") | ("mesh", path) | ("asset", id) | (randomizer key, value)
@@ -80,6 +80,11 @@ class ObjectSpec:
     up: Optional[str] = None       #: the model's up axis, when the scenario names it
     #: The sampled value of every randomizer key (None: not given), in sample order.
     randomizers: Dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def labelled(self) -> bool:
+        """False for objects of entries with ``label: false`` (no class, id 0 in the masks)."""
+        return self.class_index >= 0
 
 
 @dataclass
@@ -104,7 +109,8 @@ LIMIT_KEYS = ("min_pixels", "min_visible_fraction", "max_visible_fraction")
 def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> ObjectSpec:
     shape_key = next(k for k in SHAPE_KEYS if o.get(k) is not None)
     mat = o.get("material")
-    return ObjectSpec(index=index, kind=kind, class_index=class_index, class_name=str(o["class"]), name=o.get("name"),
+    return ObjectSpec(index=index, kind=kind, class_index=class_index, class_name=str(o["class"] or ""),
+                      name=o.get("name"),
                       shape=(shape_key, o[shape_key]), size=tuple(float(x) for x in o["size"]),
                       scale=float(o["scale"]), yaw=float(o["yaw"]), material=PluginSpec.of(mat) if mat else None,
                       forward=o.get("forward"), up=o.get("up"),
@@ -126,7 +132,8 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
         body = {key: v for key, v in kind.items() if key != "count"}
         for i in range(int(n)):
             o = D.sample_tree(body, rng, f"objects[{k}]#{i}", rec)
-            objects.append(_object(len(objects), k, sc.class_names.index(kind["class"]), o))
+            cls = sc.class_names.index(kind["class"]) if kind["label"] else -1
+            objects.append(_object(len(objects), k, cls, o))
     steps = D.sample_tree(spec["post"], rng, "post", rec)
     intrinsics = {k: float(camera[k]) for k in ("fx", "fy", "cx", "cy") if camera.get(k) is not None}
     return FrameSpec(

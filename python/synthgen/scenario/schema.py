@@ -54,7 +54,10 @@ CAMERA = randomized(settings_record("camera", "pinhole", scenario=True, keys=("f
 SHAPE_KEYS = ("primitive", "mesh", "asset") + tuple(r.key for r in randomize.randomizers() if r.shape)
 
 OBJECT = Record(
-    {"class": String(REQUIRED, doc="class name (COCO category, YOLO class, KITTI type)"),
+    {"class": String(None, doc="class name (COCO category, YOLO class, KITTI type); required unless label is false"),
+     "label": Bool(True, doc="false: an unlabelled object (occluder, clutter): it is rendered and occludes, but has "
+                             "no class, id 0 in the masks, no annotation, and no visibility limits unless the entry "
+                             "sets them"),
      "name": String(None, doc="label for messages and metadata"),
      "count": R(Integer(1, min=0, max=1000, doc="instances per frame")),
      "primitive": R(Choice(["box", "sphere", "cylinder", "cone"], None,
