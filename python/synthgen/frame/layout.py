@@ -63,7 +63,7 @@ class FrameView:
 
 @dataclass
 class Layout:
-    spots: List[Optional[Tuple[float, float]]]
+    spots: List[Optional[Tuple[float, float, float]]]
     dropped: Dict[int, str]
     attempts: int
 
@@ -71,24 +71,138 @@ class Layout:
         return [s is not None and k not in self.dropped for k, s in enumerate(self.spots)]
 
 
-def _spots(view: FrameView, placement: Mapping[str, Any], rng: np.random.Generator) -> List[Optional[Tuple[float, float]]]:
-    """Positions (x, z) on the ground; None where an object found no free spot."""
-    x0, z0, x1, z1 = placement["region"]
-    placed: List[Tuple[float, float, float]] = []
-    out: List[Optional[Tuple[float, float]]] = []
-    for o in view.objects:
+#: A spot: (x, z) on the ground, and the height y the object stands at (0, or the top of
+#: the object it rests on).
+Spot = Tuple[float, float, float]
+
+
+def _corners(o: PlacedObject) -> np.ndarray:
+    """The 8 corners of an object's box after its local transform (scale, lift, tilt)."""
+    half = 0.5 * np.asarray(o.dims, np.float64)
+    box = np.array([[sx * half[0], half[1] + sy * half[1], sz * half[2], 1.0]
+                    for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    kind = o.spec.shape[0]
+    if kind not in ("primitive", "mesh", "asset"):  # signs and plates: their local is not a box's
+        return box[:, :3]
+    # The canonical box (forward +x, up +y, on y = 0) through the tilt the local carries:
+    # compare the local with the untilted box via the tilt alone (roll/pitch about the centre).
+    if not (o.spec.roll or o.spec.pitch):
+        return box[:, :3]
+    from .renderer import tilted
+
+    m, _ = tilted(np.eye(4), o.dims, o.spec.roll, o.spec.pitch)
+    return (box @ m.T)[:, :3]
+
+
+def _top(o: PlacedObject) -> float:
+    """Height of the top of an object's box above its base."""
+    return float(_corners(o)[:, 1].max())
+
+
+def _on_ground(view: FrameView, camera: PinholeCamera, o: PlacedObject, rng: np.random.Generator,
+               region: Sequence[float]) -> Tuple[float, float]:
+    """A spot for an object on the ground: uniform in ``region``, or, with ``pixel_height``,
+    in a random image column at the camera depth where its box is that many pixels high and
+    wholly inside the image's height (NaN when there is none)."""
+    if o.spec.pixel_height is None:
+        x0, z0, x1, z1 = region
+        return float(rng.uniform(x0, x1)), float(rng.uniform(z0, z1))
+    w, h = view.resolution
+    wfc = np.asarray(camera.world_from_camera, np.float64)
+    right, down, fwd, c = wfc[:3, 0], wfc[:3, 1], wfc[:3, 2], wfc[:3, 3]
+    cam_from_world = np.linalg.inv(wfc)
+    target = float(o.spec.pixel_height)
+    fx, fy, cx, cy = (float(v) for v in (camera.fx, camera.fy, camera.cx, camera.cy))
+    yaw = P.rotate([0.0, 1.0, 0.0], float(o.spec.yaw)).astype(np.float64)[:3, :3]
+    corners = _corners(o) @ yaw.T
+    if abs(down[1]) < 1e-6:  # a camera looking straight down or up: no ground column
+        return float("nan"), float("nan")
+    u = float(rng.uniform(0.0, w))
+    # NOTE: pinhole projection: an extent H at camera depth z spans fy H / z pixels, so the
+    # depth is refined by z <- z * (extent(z) / target), a fixed-point iteration that converges
+    # in a few steps (extent ~ 1/z); the box's own depth and the camera's pitch are included.
+    z = fy * float(corners[:, 1].max()) / target
+    ground = None
+    for _ in range(8):
+        x = z * (u - cx) / fx
+        t = -(c[1] + z * fwd[1] + x * right[1]) / down[1]  # the ground point of that column at depth z
+        ground = c + z * fwd + x * right + t * down
+        pc = (np.c_[corners + ground, np.ones(8)] @ cam_from_world.T)[:, :3]
+        if np.any(pc[:, 2] <= 1e-3):
+            return float("nan"), float("nan")
+        v = fy * pc[:, 1] / pc[:, 2] + cy
+        extent = float(v.max() - v.min())
+        z *= extent / target
+    uu = fx * pc[:, 0] / pc[:, 2] + cx
+    if v.min() < 0.0 or v.max() > h or uu.min() < 0.0 or uu.max() > w or abs(extent / target - 1.0) > 0.01:
+        return float("nan"), float("nan")
+    return float(ground[0]), float(ground[2])
+
+
+def _spots(view: FrameView, placement: Mapping[str, Any], rng: np.random.Generator,
+           camera: PinholeCamera) -> List[Optional[Spot]]:
+    """A spot per object; None where an object found none. Objects resting on others are
+    placed after them, on the top of one of them chosen at random."""
+    objects = view.objects
+    order = sorted(range(len(objects)), key=lambda k: _depth(objects, k))
+    ground: List[Tuple[float, float, float]] = []              # (x, z, radius) on the ground
+    on_top: Dict[int, List[Tuple[float, float, float]]] = {}   # support index -> (x, z, radius)
+    out: List[Optional[Spot]] = [None] * len(objects)
+    margin = placement["margin"]
+
+    def free(x: float, z: float, r: float, others: Sequence[Tuple[float, float, float]]) -> bool:
+        return not placement["non_overlapping"] or all(math.hypot(x - px, z - pz) >= r + pr + margin
+                                                       for px, pz, pr in others)
+
+    for k in order:
+        o = objects[k]
         r = o.radius
-        spot = None
+        if o.spec.support is not None:
+            supports = [j for j in range(len(objects))
+                        if objects[j].spec.kind == o.spec.support and out[j] is not None and j != k]
+            if not supports:
+                continue
+            j = supports[int(rng.integers(len(supports)))]
+            s, sp = objects[j], out[j]
+            half = 0.5 * np.asarray(s.dims, np.float64)
+            yaw = math.radians(float(s.spec.yaw))
+            for _ in range(100):
+                # Uniform on the support's top face (its own x, z), kept on it when it fits.
+                lx = float(rng.uniform(-max(half[0] - r, 0.0), max(half[0] - r, 0.0)))
+                lz = float(rng.uniform(-max(half[2] - r, 0.0), max(half[2] - r, 0.0)))
+                x = sp[0] + math.cos(yaw) * lx + math.sin(yaw) * lz
+                z = sp[1] - math.sin(yaw) * lx + math.cos(yaw) * lz
+                if free(x, z, r, on_top.get(j, [])):
+                    out[k] = (x, z, sp[2] + _top(s))
+                    on_top.setdefault(j, []).append((x, z, r))
+                    break
+            continue
         for _ in range(100):
-            x, z = float(rng.uniform(x0, x1)), float(rng.uniform(z0, z1))
-            if not placement["non_overlapping"] or all(
-                    math.hypot(x - px, z - pz) >= r + pr + placement["margin"] for px, pz, pr in placed):
-                spot = (x, z)
+            x, z = _on_ground(view, camera, o, rng, o.spec.region or placement["region"])
+            if math.isfinite(x) and free(x, z, r, ground):
+                out[k] = (x, z, 0.0)
+                ground.append((x, z, r))
                 break
-        if spot is not None:
-            placed.append((spot[0], spot[1], r))
-        out.append(spot)
     return out
+
+
+def _no_spot_reason(o: PlacedObject) -> str:
+    if o.spec.support is not None:
+        return "no free spot on the top of the objects it rests on (rests_on)"
+    if o.spec.pixel_height is not None:
+        return "no free spot at the distance its pixel_height asks for, inside the image"
+    return "no free spot in the placement region"
+
+
+def _depth(objects: Sequence[PlacedObject], k: int) -> int:
+    """How many supports are below object k (0: it stands on the ground)."""
+    n, s = 0, objects[k].spec.support
+    seen = set()
+    while s is not None and s not in seen:
+        seen.add(s)
+        n += 1
+        s = next((o.spec.support for o in objects if o.spec.kind == s), None)
+    return n
 
 
 def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int) -> Tuple[int, int]:
@@ -110,8 +224,8 @@ def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int) -> Tuple[int, 
     return inside, int(mask.sum())
 
 
-def _put(view: FrameView, o: PlacedObject, spot: Tuple[float, float]) -> None:
-    base = P.translate([spot[0], 0.0, spot[1]]) @ P.rotate([0.0, 1.0, 0.0], float(o.spec.yaw))
+def _put(view: FrameView, o: PlacedObject, spot: Spot) -> None:
+    base = P.translate([spot[0], spot[2], spot[1]]) @ P.rotate([0.0, 1.0, 0.0], float(o.spec.yaw))
     post = None
     if o.decor is not None:  # a 5 cm post behind the panel, from the ground to its middle
         h = float(o.post_height)
@@ -134,7 +248,7 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
     attempts = 0
     for attempt in range(placement["max_retries"] + 1):
         attempts = attempt + 1
-        spots = _spots(view, placement, rng)
+        spots = _spots(view, placement, rng, camera)
         for o, spot in zip(objects, spots):
             if spot is not None:
                 _put(view, o, spot)
@@ -144,7 +258,7 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
         fails = []
         for k, spot in enumerate(spots):
             if spot is None:
-                fails.append((k, "no free spot in the placement region"))
+                fails.append((k, _no_spot_reason(objects[k])))
             elif counts[k + 1] < max(1 if objects[k].spec.labelled else 0, limits[k]["min_pixels"]):
                 fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {limits[k]['min_pixels']}"))
         if need_amodal and not fails:

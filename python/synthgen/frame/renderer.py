@@ -53,6 +53,26 @@ def orientation(forward: str, up: str) -> Optional[np.ndarray]:
     return np.stack([f, u, np.cross(f, u)])
 
 
+def tilted(local: np.ndarray, dims: np.ndarray, roll: float, pitch: float) -> Tuple[np.ndarray, float]:
+    """(local, footprint radius) of an object (forward +x, up +y, its box of ``dims`` standing
+    on y = 0) tilted by ``roll`` about its forward axis and ``pitch`` about its lateral axis
+    (positive: front up), about the box's centre, then lowered until its lowest box corner
+    touches y = 0 (it rests on an edge or a corner, as a dropped box would)."""
+    r = P.rotate([0.0, 0.0, 1.0], float(pitch)) @ P.rotate([1.0, 0.0, 0.0], float(roll))
+    r = r.astype(np.float64)
+    half = 0.5 * np.asarray(dims, np.float64)
+    centre = np.array([0.0, half[1], 0.0])
+    corners = np.array([[sx * half[0], sy * half[1], sz * half[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    turned = corners @ r[:3, :3].T
+    lift = np.eye(4)
+    lift[1, 3] = -turned[:, 1].min()
+    shift = np.eye(4)
+    shift[:3, 3] = -centre
+    m = lift @ r @ shift @ local
+    radius = float(np.hypot(turned[:, 0], turned[:, 2]).max())
+    return m, radius
+
+
 class FrameRenderer:
     """Renders frames of one scenario, keeping the scene across frames (see the module
     docstring)."""
@@ -124,7 +144,7 @@ class FrameRenderer:
             "lights": [dict(zip(("type", "params"), light_plugin(li))) for li in spec.lights],
             "objects": object_records(objects, keep, layout.dropped, amodal, arrays["instance_id"], camera,
                                       sc.class_names),
-            "sampled": spec.sampled, "class_names": list(sc.class_names),
+            "sampled": spec.sampled, "class_names": list(sc.class_names), "negative": spec.negative,
             # What this frame shares with others, for the train/val split (outputs.split): its
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
@@ -274,4 +294,6 @@ class FrameRenderer:
             t4 = np.eye(4)
             t4[:3, :3] = turn
             m = m @ t4
+        if o.roll or o.pitch:
+            return tilted(m, dims, o.roll, o.pitch) + (dims, None)
         return m, 0.5 * math.hypot(dims[0], dims[2]), dims, None

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..schema import distributions as D
 from ..schema import limits
-from ..schema.errors import Loc, SceneFileError, ValidationContext
+from ..schema.errors import Loc, SceneFileError, ValidationContext, suggest
 from ..schema.fields import Validated
 from ..schema.yaml_io import parse_yaml, read_text
 from .schema import SCENARIO_SCHEMA
@@ -139,6 +139,46 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
     x0, z0, x1, z1 = spec["placement"]["region"]
     if not (x0 < x1 and z0 < z1):
         ctx.error(spec["placement"].locs.get("region", spec.loc), "region must satisfy x_min < x_max and z_min < z_max")
+    for o in spec["objects"]:
+        if o["region"] is not None:
+            a, b, c, d = o["region"]
+            if not (a < c and b < d):
+                ctx.error(o.locs["region"], "region must satisfy x_min < x_max and z_min < z_max")
+        if o["rests_on"] is not None and o["pixel_height"] is not None:
+            ctx.error(o.locs["pixel_height"], "an object that rests_on another cannot also be placed by pixel_height")
+    support_of(spec, ctx)
+
+
+def support_of(spec: Validated, ctx: Optional[ValidationContext] = None) -> List[Optional[int]]:
+    """For each object entry, the index of the entry its objects rest on (rests_on: a name, else a
+    class), or None; errors (with ``ctx``) for unknown names, itself and cycles."""
+    entries = spec["objects"]
+    out: List[Optional[int]] = []
+    for i, o in enumerate(entries):
+        if o["rests_on"] is None:
+            out.append(None)
+            continue
+        by_name = [j for j, e in enumerate(entries) if e["name"] == o["rests_on"]]
+        by_class = [j for j, e in enumerate(entries) if e["class"] == o["rests_on"] and e["name"] is None]
+        found = by_name or by_class
+        if ctx is not None:
+            if not found:
+                names = sorted({e["name"] for e in entries if e["name"]} | {e["class"] for e in entries if e["class"]})
+                ctx.error(o.locs["rests_on"], f"no object entry is named {o['rests_on']!r}{suggest(o['rests_on'], names)}")
+            if len(found) > 1:
+                ctx.error(o.locs["rests_on"], f"{len(found)} entries are named {o['rests_on']!r}; give the support a unique name")
+            if found[0] == i:
+                ctx.error(o.locs["rests_on"], "an entry cannot rest on itself")
+        out.append(found[0] if found else None)
+    if ctx is not None:
+        for i in range(len(entries)):
+            seen, j = {i}, out[i]
+            while j is not None:
+                if j in seen:
+                    ctx.error(entries[i].locs["rests_on"], "the entries' rests_on form a cycle")
+                seen.add(j)
+                j = out[j]
+    return out
 
 
 def parse_scenario(data: Any, source: str = "<scenario>", base_dir: Optional[str] = None, text: str = "") -> Scenario:

@@ -17,7 +17,7 @@ import numpy as np
 from .. import randomize
 from ..schema import distributions as D
 from ..schema.plugins import given_params
-from .load import Scenario
+from .load import Scenario, support_of
 from .schema import SHAPE_KEYS
 
 __all__ = ["frame_rng", "sample_frame", "FrameSpec", "ObjectSpec", "PluginSpec", "CameraSpec", "GroundSpec"]
@@ -80,6 +80,11 @@ class ObjectSpec:
     up: Optional[str] = None       #: the model's up axis, when the scenario names it
     #: The sampled value of every randomizer key (None: not given), in sample order.
     randomizers: Dict[str, Any] = field(default_factory=dict)
+    roll: float = 0.0               #: tilt about the forward axis, degrees
+    pitch: float = 0.0              #: tilt about the lateral axis, degrees
+    region: Optional[Tuple[float, float, float, float]] = None  #: its entry's region, if it has one
+    support: Optional[int] = None   #: the entry whose objects it rests on (rests_on), if any
+    pixel_height: Optional[float] = None  #: its box height in the image, pixels, if asked
 
     @property
     def labelled(self) -> bool:
@@ -100,13 +105,15 @@ class FrameSpec:
     sampled: Dict[str, Any]
     #: Post-processing steps: name and every parameter (defaults included), in order.
     post: List[PluginSpec] = field(default_factory=list)
+    #: A negative frame: its labelled objects were left out (scenario negative_frames).
+    negative: bool = False
 
 
 #: The visibility limits an object entry may set for its instances.
 LIMIT_KEYS = ("min_pixels", "min_visible_fraction", "max_visible_fraction")
 
 
-def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> ObjectSpec:
+def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any], support: Optional[int]) -> ObjectSpec:
     shape_key = next(k for k in SHAPE_KEYS if o.get(k) is not None)
     mat = o.get("material")
     return ObjectSpec(index=index, kind=kind, class_index=class_index, class_name=str(o["class"] or ""),
@@ -115,7 +122,11 @@ def _object(index: int, kind: int, class_index: int, o: Mapping[str, Any]) -> Ob
                       scale=float(o["scale"]), yaw=float(o["yaw"]), material=PluginSpec.of(mat) if mat else None,
                       forward=o.get("forward"), up=o.get("up"),
                       limits={k: o[k] for k in LIMIT_KEYS if o.get(k) is not None},
-                      randomizers={r.key: o.get(r.key) for r in randomize.randomizers()})
+                      randomizers={r.key: o.get(r.key) for r in randomize.randomizers()},
+                      roll=float(o["roll"]), pitch=float(o["pitch"]),
+                      region=tuple(float(v) for v in o["region"]) if o.get("region") is not None else None,
+                      support=support,
+                      pixel_height=float(o["pixel_height"]) if o.get("pixel_height") is not None else None)
 
 
 def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
@@ -127,13 +138,21 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
     lights = D.sample_tree(spec["lights"], rng, "lights", rec)
     ground = D.sample_tree(spec["ground"], rng, "ground", rec)
     objects: List[ObjectSpec] = []
+    supports = support_of(spec)
     for k, kind in enumerate(spec["objects"]):
         n = D.sample_tree(kind["count"], rng, f"objects[{k}].count", rec)
         body = {key: v for key, v in kind.items() if key != "count"}
         for i in range(int(n)):
             o = D.sample_tree(body, rng, f"objects[{k}]#{i}", rec)
             cls = sc.class_names.index(kind["class"]) if kind["label"] else -1
-            objects.append(_object(len(objects), k, cls, o))
+            objects.append(_object(len(objects), k, cls, o, supports[k]))
+    # Negative frames: the labelled objects left out (a stream of its own, so that every
+    # other draw is the same as in the frame with them).
+    negative = bool(spec["negative_frames"] > 0.0 and frame_rng(sc.seed, frame, 4).random() < spec["negative_frames"])
+    if negative:
+        objects = [o for o in objects if not o.labelled]
+        for i, o in enumerate(objects):
+            o.index = i
     steps = D.sample_tree(spec["post"], rng, "post", rec)
     intrinsics = {k: float(camera[k]) for k in ("fx", "fy", "cx", "cy") if camera.get(k) is not None}
     return FrameSpec(
@@ -143,4 +162,5 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
         ground=GroundSpec(enabled=bool(ground["enabled"]), size=None if ground["size"] is None else float(ground["size"]),
                           material=PluginSpec.of(ground["material"])),
         objects=objects, sampled={k: D.plain(v) for k, v in rec.items()},
-        post=[PluginSpec(str(p["type"]), {k: v for k, v in p.items() if k != "type"}) for p in steps])
+        post=[PluginSpec(str(p["type"]), {k: v for k, v in p.items() if k != "type"}) for p in steps],
+        negative=negative)

@@ -76,6 +76,16 @@ OBJECT = Record(
      "up": Choice(list(AXES), None, doc="the model's up axis (default: the asset's, else +y): turned to the "
                                         "world's up"),
      "material": R(MATERIAL, doc="material; omitted: the mesh's own materials or grey", default=None),
+     "roll": R(Number(0.0, min=-180.0, max=180.0, doc="tilt about the object's forward axis, degrees (after which "
+                                                      "it rests on its lowest point)")),
+     "pitch": R(Number(0.0, min=-180.0, max=180.0, doc="tilt about its lateral axis, degrees (positive: front up)")),
+     "region": Vector(4, None, doc="[x_min, z_min, x_max, z_max] where this entry's objects stand (default: "
+                                   "placement.region)"),
+     "rests_on": String(None, doc="the name (or class) of another entry whose objects this entry's objects rest on: "
+                                  "on the top of one of them, chosen at random (stacks, things on tables or roofs)"),
+     "pixel_height": R(Number(None, min=1.0, doc="height of the object's box in the image, pixels (a distribution "
+                                                 "covers detector scales): it stands at the distance that gives it, "
+                                                 "instead of in a region")),
      "min_pixels": Integer(None, min=0, doc="visible pixels of each instance (default: placement.min_pixels)"),
      "min_visible_fraction": Number(None, min=0.0, max=1.0,
                                     doc="visible / amodal pixels of each instance (default: placement's)"),
@@ -137,5 +147,8 @@ SCENARIO_SCHEMA = Record(
      "render": RENDER,
      "outputs": ListOf(Choice(outputs.kind_names()), outputs.default_outputs(), doc="what to write"),
      "split": split.SCHEMA,
+     "negative_frames": Number(0.0, min=0.0, max=1.0,
+                               doc="fraction of frames without labelled objects (negatives for detectors; unlabelled "
+                                   "entries stay)"),
      "post": ListOf(POST_STEP, [], doc="image-space steps applied to each frame's image, in order")},
     doc="a scenario")
