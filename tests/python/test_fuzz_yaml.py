@@ -77,3 +77,17 @@ def test_a_short_fuzzing_run_is_clean(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "fuzz_yaml: executions=40 crashes=0" in out, out
     assert rc == 0
+
+
+@pytest.mark.parametrize("text, where, what", [
+    ("a: !!float ior\n", "1:4", "cannot read float value 'ior'"),
+    ("b:\n  !!int width: 640\n", "2:3", "cannot read int value 'width'"),
+    ("c: !!bool maybe\n", "1:4", "cannot read bool value 'maybe'"),
+    ("d: !!timestamp 2020-13-45\n", "1:4", "cannot read timestamp value"),
+])
+def test_tagged_values_that_cannot_be_read_are_located(text, where, what):
+    """Found by fuzz_yaml: PyYAML's scalar constructors raised plain ValueError / KeyError."""
+    from synthgen.schema import parse_yaml
+
+    with pytest.raises(sg.SynthgenError, match=rf"^x.yaml:{where}: invalid YAML: {what}"):
+        parse_yaml(text, "x.yaml")

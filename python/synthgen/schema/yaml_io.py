@@ -37,12 +37,32 @@ class MarkedList(list):
         self.item_marks: List[Tuple[int, int]] = []
 
 
+def show(node: yaml.Node) -> str:
+    """A node's value for a message (scalars as written, collections by kind)."""
+    if isinstance(node, yaml.ScalarNode):
+        v = str(node.value)
+        return repr(v if len(v) <= 40 else v[:37] + "...")
+    return "(a mapping)" if isinstance(node, yaml.MappingNode) else "(a list)"
+
+
 def _mark(m: yaml.Mark) -> Tuple[int, int]:
     return (m.line + 1, m.column + 1)
 
 
 class _MarkedLoader(yaml.SafeLoader):
     """Safe YAML loader producing MarkedDict / MarkedList, rejecting duplicate keys."""
+
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        # PyYAML's scalar constructors raise plain ValueError for a tagged value they cannot
+        # read (`!!float ior`, `!!int width`; found by fuzz_yaml): located here instead.
+        try:
+            return super().construct_object(node, deep=deep)
+        except (yaml.YAMLError, MemoryError, RecursionError):
+            raise
+        except Exception as e:  # ValueError, KeyError (`!!bool maybe`), OverflowError, ...
+            raise yaml.constructor.ConstructorError(
+                None, None, f"cannot read {node.tag.rsplit(':', 1)[-1]} value {show(node)}: {e}",
+                node.start_mark) from None
 
     def construct_marked_mapping(self, node: yaml.Node) -> MarkedDict:
         if not isinstance(node, yaml.MappingNode):
