@@ -29,7 +29,7 @@ import synthgen
 from synthgen import cli, outputs, post, randomize
 from synthgen.scenario import SCENARIO_SCHEMA
 from synthgen.schema.plugins import plugin_info, plugin_names
-from synthgen.schema.reference import format_schema
+from synthgen.schema.reference import format_scenario_schema, format_schema
 from synthgen.scene.scene_file import SCENE_SCHEMA
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -167,7 +167,7 @@ def _code(text: str) -> str:
 #: file -> {block name: generator}
 BLOCKS: Dict[str, Dict[str, Callable[[], str]]] = {
     "docs/scene_file.md": {"scene-file-reference": lambda: _code(format_schema(SCENE_SCHEMA))},
-    "docs/scenarios.md": {"scenario-reference": lambda: _code(format_schema(SCENARIO_SCHEMA))},
+    "docs/scenarios.md": {"scenario-reference": lambda: _code(format_scenario_schema())},
     "docs/architecture.md": {"plugins": plugins_table, "registries": registries_table, "python-layout": python_layout},
     "README.md": {"layout": repo_layout},
 }

@@ -10,7 +10,7 @@ import synthgen
 from synthgen import cli
 from synthgen.scenario import schema as scenario_schema
 from synthgen.schema import fields as F
-from synthgen.schema.plugins import _short
+from synthgen.schema.plugins import InlineTexture, _short
 from synthgen.schema.random import Random
 from synthgen.scene import scene_file
 
@@ -33,6 +33,8 @@ def _field_default(f):
 
 def _range_of(f):
     """(min, max, min_open, max_open) of a numeric field, of a vector's elements, of a colour."""
+    if isinstance(f, InlineTexture):
+        f = f.constant
     if isinstance(f, Random):
         f = f.inner
     for attr in ("element", "color", "number"):
@@ -47,12 +49,21 @@ def _range_of(f):
 
 def _check_variant(kind, name, rec, scenario):
     info = synthgen.plugin_info(kind, name)
-    declared = [p for p in info["params"] if not (scenario and p["type"] in ("texture", "material"))]
+    # In scenarios texture parameters are inline textures (or their constant form); materials
+    # (mix) have no form.
+    declared = [p for p in info["params"] if not (scenario and p["type"] == "material")]
     assert list(rec.fields) == [p["name"] for p in declared], (kind, name)
     for p in declared:
         f = rec.fields[p["name"]]
         if scenario:
-            assert isinstance(f, Random), (kind, name, p["name"], "every scenario leaf may be a distribution")
+            assert isinstance(f, (Random, InlineTexture)), (kind, name, p["name"], "every scenario leaf may be a "
+                                                                                   "distribution")
+            assert isinstance(f, InlineTexture) == (p["type"] in ("texture", "float_texture", "color_texture"))
+            if isinstance(f, InlineTexture):
+                if f.constant is None:
+                    assert p["type"] == "texture" and f.default is None
+                    continue
+                f = f.constant
         inner = f.inner if isinstance(f, Random) else f
         assert _field_default(inner) == _default(p), (kind, name, p["name"])
         if isinstance(inner, F.Choice):
@@ -82,7 +93,7 @@ def test_scene_file_records_are_the_declarations(kind):
 def test_scenario_records_are_the_declarations_with_distributions(kind, rec):
     # Every plugin but those that need a reference to another object (mix).
     usable = [n for n in synthgen.plugin_names(kind)
-              if not any(p["required"] and p["type"] in ("texture", "material")
+              if not any(p["required"] and p["type"] == "material"
                          for p in synthgen.plugin_info(kind, n)["params"])]
     assert sorted(rec.variants) == usable
     for name, v in rec.variants.items():

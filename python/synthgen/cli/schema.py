@@ -12,12 +12,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..schema.reference import format_schema
+    from ..schema.reference import format_scenario_schema, format_schema
 
     if getattr(args, "scenario", False):
-        from ..scenario import SCENARIO_SCHEMA
-
-        print(format_schema(SCENARIO_SCHEMA))
+        print(format_scenario_schema())
     else:
         from ..scene.scene_file import SCENE_SCHEMA
 

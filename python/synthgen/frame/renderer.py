@@ -23,7 +23,7 @@ from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
 from ..scene import primitives as P
 from .layout import FrameView, amodal_pixels, search_layout
 from .records import PlacedObject, frame_camera, level_frame, object_records
-from .resources import FrameLibrary, Pool, Shape, Shapes
+from .resources import FrameLibrary, Pool, Shape, Shapes, realize
 
 __all__ = ["FrameRenderer", "light_plugin"]
 
@@ -106,8 +106,12 @@ class FrameRenderer:
         spec = sample_frame(sc, frame)
         camera = frame_camera(spec.camera, sc.resolution, frame_rng(sc.seed, frame, 2))
         self._set_lights(spec.lights)
+        # This frame's generated textures and materials go into a new library; the previous
+        # frame's are removed once this frame's exist (an image both use stays decoded).
+        previous, self.library = self.library, FrameLibrary(self.scene)
         self._set_ground(spec)
         objects = self._set_objects(spec)
+        previous.release()
         self.objects = objects  # the frame's placed objects (for tools and tests)
         t_update = time.perf_counter()
 
@@ -166,13 +170,13 @@ class FrameRenderer:
         if self.ground_material is None:
             self.ground_material = self.scene.add_material("diffuse", {})
         m = spec.ground.material
-        self.scene.update_material(self.ground_material, m.type, m.params)
+        self.scene.update_material(self.ground_material, m.type, realize(self.library, m.params))
         self.scene.set_instance_material(self.ground, self.ground_material)
 
     def _slot_material(self, k: int, m: PluginSpec) -> int:
         while len(self.slots) <= k:
             self.slots.append(self.scene.add_material("diffuse", {}))
-        self.scene.update_material(self.slots[k], m.type, m.params)
+        self.scene.update_material(self.slots[k], m.type, realize(self.library, m.params))
         return self.slots[k]
 
     def _set_objects(self, spec: FrameSpec) -> List[PlacedObject]:
@@ -183,7 +187,11 @@ class FrameRenderer:
             self.scene.set_instance_visible(inst, False)
             self.scene.set_instance_material(inst, -1)
             self._set_material_map(inst, {})
-        previous, self.library = self.library, FrameLibrary(self.scene)
+        # Material slots no object uses this frame let go of last frame's textures.
+        used = {o.index for o in spec.objects}
+        for k, slot in enumerate(self.slots):
+            if k not in used:
+                self.scene.update_material(slot, "diffuse", {})
         objects = []
         n_decor = 0
         for o in spec.objects:
@@ -199,8 +207,6 @@ class FrameRenderer:
                                                                material_id=self.pole_material))
         for d in self.decor.beyond(n_decor):
             self.scene.set_instance_visible(d, False)
-        # The previous frame's generated textures and materials are unused now.
-        previous.release()
         return objects
 
     def _set_object(self, spec: FrameSpec, o: ObjectSpec) -> PlacedObject:

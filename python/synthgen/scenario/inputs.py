@@ -69,12 +69,37 @@ class _Checker:
                 self.fail(loc, f"cannot fetch asset '{a}'", e)
             (self.mesh if kind == "mesh" else self.envmap)(path, loc)
 
+    def texture_files(self, tree: Any, loc: Loc) -> None:
+        """Loads the image files of every inline texture in ``tree`` (any option of any
+        distribution)."""
+        from ..schema.plugins import TextureSpec
+
+        if isinstance(tree, D.Choice):
+            for o in tree.options:
+                self.texture_files(o, loc)
+        elif isinstance(tree, TextureSpec):
+            rec = tree["texture"]
+            rloc = getattr(rec, "loc", loc)
+            for f in _options(rec.get("file")) if isinstance(rec, dict) else []:
+                if isinstance(f, InputPath):
+                    self.image(str(f), getattr(rec, "locs", {}).get("file", rloc))
+            self.texture_files(dict(rec), rloc)
+        elif isinstance(tree, dict):
+            for k, v in tree.items():
+                self.texture_files(v, getattr(tree, "locs", {}).get(k, loc))
+        elif isinstance(tree, (list, tuple)):
+            for v in tree:
+                self.texture_files(v, loc)
+
     def plugin(self, kind: str, rec: Any, loc: Loc) -> None:
         """Creates a material or light whose parameters are all constants."""
+        self.texture_files(rec, loc)
         for option in _options(rec):
             if not isinstance(option, Validated) or not _constant(option):
                 continue
-            params = given_params(option)
+            from ..frame.resources import realize  # (synthgen.frame imports this package)
+
+            params = realize(self.scene, given_params(option))
             if kind == "light":
                 if option.get("type") == "envmap":
                     if option.get("file") is not None:

@@ -24,14 +24,74 @@ import functools
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple
 
 from .._core import plugin_info as _core_plugin_info, plugin_names as _core_plugin_names
+from .errors import Loc, ValidationContext, show_value
 from .fields import (REQUIRED, Bool, Choice, ColorOrTexture, Field, FilePath, Integer, Matrix4, MaterialRef, Number,
                      NumberList, Record, ScalarOrTexture, String, TextureRefField, Vector)
 
 __all__ = ["plugin_info", "plugin_names", "param_field", "plugin_record", "settings_record", "given_params",
            "REFERENCE_TYPES"]
 
-#: Parameter types that refer to other library objects (no scenario form).
+#: Parameter types that refer to other library objects (in scenarios textures are written
+#: inline, materials have no form).
 REFERENCE_TYPES = ("texture", "material")
+
+
+class TextureSpec(dict):
+    """A validated (or sampled) inline texture of a scenario: ``{"texture": record}``, the
+    record being ``{type: NAME, ...parameters}`` (created per frame, synthgen.frame)."""
+
+
+_TEXTURE_RECORD: List[Any] = []
+
+
+def scenario_texture_record() -> Record:
+    """The scenario form of a texture: {type: NAME, ...its parameters, each may be a
+    distribution or, for texture parameters, an inline texture} (built once, lazily: textures
+    nest)."""
+    if not _TEXTURE_RECORD:
+        from .random import randomized
+
+        _TEXTURE_RECORD.append(None)  # being built: nested fields look it up when validating
+        _TEXTURE_RECORD[0] = randomized(plugin_record("texture", scenario=True, doc="a texture"))
+    return _TEXTURE_RECORD[0]
+
+
+class InlineTexture(Field):
+    """Scenario form of a texture parameter: its constant form (a number or colour, or a
+    distribution over them), or an inline texture ``{texture: {type: NAME, ...}}`` -- an
+    image, noise, a checker, a gradient, ... whose parameters may be distributions too."""
+
+    #: randomized() leaves this field as it is: it takes distributions itself.
+    randomizes = True
+
+    def __init__(self, constant: Optional[Field], default: Any = None, doc: str = ""):
+        super().__init__(default, doc)
+        self.constant = constant
+
+    def describe(self) -> str:
+        form = "{texture: {type: NAME, ...}}"
+        return f"{self.constant.describe()}, or {form}" if self.constant is not None else form
+
+    def missing(self, loc: Loc, ctx: ValidationContext) -> Any:
+        if self.constant is not None:
+            return self.constant.missing(loc, ctx)
+        return super().missing(loc, ctx)
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        from .random import Random
+
+        if isinstance(value, Mapping) and "texture" in value:
+            extra = [k for k in value if k != "texture"]
+            if extra:
+                ctx.error(loc.key(extra[0], value), f"an inline texture is {{texture: {{...}}}} alone; unexpected key "
+                                                    f"'{extra[0]}'")
+            return TextureSpec(texture=scenario_texture_record().validate(value["texture"], loc.value("texture", value),
+                                                                          ctx))
+        if isinstance(value, Mapping) and "choice" in value:
+            return Random(self)._distribution(value, loc, ctx)  # a choice among textures and constants
+        if self.constant is None:
+            ctx.error(loc, f"expected an inline texture {{texture: {{type: NAME, ...}}}}, got {show_value(value)}")
+        return self.constant.validate(value, loc, ctx)
 
 
 @functools.lru_cache(maxsize=None)
@@ -90,13 +150,21 @@ def param_field(p: Mapping[str, Any], scenario: bool = False) -> Optional[Field]
     rng = dict(min=p["min"], max=p["max"], min_open=p["min_open"], max_open=p["max_open"])
     if t in REFERENCE_TYPES:
         if scenario:
-            return None
+            return InlineTexture(None, default, doc=doc) if t == "texture" else None
         return TextureRefField(doc=doc) if t == "texture" else MaterialRef(default, doc=doc)
     if t == "bool":
         return Bool(default, doc=doc)
     if t == "int":
         return Integer(default, doc=doc, **rng)
-    if t == "float" or (t == "float_texture" and scenario):
+    if t == "float_texture" and scenario:
+        from .random import R
+
+        return InlineTexture(R(Number(default, doc=doc, **rng)), default, doc=doc)
+    if t == "color_texture" and scenario:
+        from .random import R
+
+        return InlineTexture(R(Vector(3, default, broadcast=True, doc=doc, **rng)), default, doc=doc)
+    if t == "float":
         return Number(default, doc=doc, **rng)
     if t == "float_texture":
         return ScalarOrTexture(default, min=p["min"], max=p["max"], doc=doc)
@@ -104,7 +172,7 @@ def param_field(p: Mapping[str, Any], scenario: bool = False) -> Optional[Field]
         return Choice(p["choices"], default, doc=doc) if p["choices"] else String(default, doc=doc)
     if t == "path":
         return FilePath(default, doc=doc)
-    if t in ("color", "vec3") or (t == "color_texture" and scenario):
+    if t in ("color", "vec3"):
         return Vector(3, default, broadcast=True, doc=doc, **rng)
     if t == "color_texture":
         return ColorOrTexture(default, min=p["min"], max=p["max"], doc=doc)
@@ -118,8 +186,8 @@ def param_field(p: Mapping[str, Any], scenario: bool = False) -> Optional[Field]
 
 
 def _usable(info: Mapping[str, Any], scenario: bool) -> bool:
-    """A plugin has a scenario form unless it needs a reference to another object."""
-    return not scenario or not any(p["required"] and p["type"] in REFERENCE_TYPES for p in info["params"])
+    """A plugin has a scenario form unless it needs a material (a mix): textures are inline."""
+    return not scenario or not any(p["required"] and p["type"] == "material" for p in info["params"])
 
 
 def _params_record(info: Mapping[str, Any], scenario: bool, keys: Optional[Sequence[str]] = None,

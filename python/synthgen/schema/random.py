@@ -47,7 +47,8 @@ class Random(Field):
     def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
         if isinstance(value, dict) and any(k in D.DIST_KEYS for k in value):
             return self._distribution(value, loc, ctx)
-        if isinstance(value, dict) and not isinstance(self.inner, (Record, Random)):
+        if isinstance(value, dict) and not isinstance(self.inner, (Record, Random)) and \
+                not getattr(self.inner, "randomizes", False):
             keys = [k for k in value if isinstance(k, str)]
             hint = suggest(keys[0], D.DIST_KEYS) if keys else ""
             ctx.error(loc, f"expected a {self.inner.describe()} or a distribution, got a mapping with key(s) "
@@ -159,7 +160,7 @@ def randomized(rec: Record) -> Record:
     """A copy of a record (and its variants) in which every leaf field may be a
     distribution; nested records and lists keep their shape."""
     def wrap(f: Field) -> Field:
-        if isinstance(f, (Record, ListOf, Random)):
+        if isinstance(f, (Record, ListOf, Random)) or getattr(f, "randomizes", False):
             return f
         return Random(f)
 
