@@ -213,7 +213,7 @@ PYBIND11_MODULE(_core, m) {
 
   m.def(
       "read_image",
-      [](const std::string& path, const std::string& color_space) {
+      [](const std::string& path, const std::string& color_space, bool finite) {
         ColorSpace space = color_space == "auto"     ? ColorSpace::Auto
                            : color_space == "srgb"   ? ColorSpace::SRGB
                            : color_space == "linear" ? ColorSpace::Linear
@@ -222,15 +222,16 @@ PYBIND11_MODULE(_core, m) {
         ImageData img;
         {
           py::gil_scoped_release release;
-          img = load_image(path, space);
+          img = load_image(path, space, !finite);
         }
         py::array_t<float> out({py::ssize_t(img.height), py::ssize_t(img.width), py::ssize_t(img.channels)});
         std::memcpy(out.mutable_data(), img.pixels.data(), img.pixels.size() * sizeof(float));
         return out;
       },
-      py::arg("path"), py::arg("color_space") = "auto",
+      py::arg("path"), py::arg("color_space") = "auto", py::arg("finite") = true,
       "An image file as a float32 H x W x C array of linear values: 8- and 16-bit files (PNG, JPEG,\n"
-      "TIFF) are sRGB-decoded unless color_space='linear'; float files (EXR, HDR) are kept. The file\n"
+      "TIFF) are sRGB-decoded unless color_space='linear'; float files (EXR, HDR) are kept; values\n"
+      "must be finite unless finite=False (a depth map's +inf background). The file\n"
       "is decoded by synthgen-reader, a separate process with time and memory limits, so a corrupt\n"
       "or hostile file raises FileError naming it instead of crashing the caller.");
 

@@ -27,12 +27,15 @@ struct ImageData {
 ///
 /// The decoding runs in the synthgen-reader process (core/isolate.h) with time and memory
 /// limits: a file that crashes or hangs a format library becomes a FileError, not a dead run.
-ImageData load_image(const std::string& path, ColorSpace space);
+///
+/// Values that are not finite (NaN, infinity) are refused unless `allow_nonfinite` (data
+/// images such as a depth map with +inf on background; never textures or environment maps).
+ImageData load_image(const std::string& path, ColorSpace space, bool allow_nonfinite = false);
 
 /// load_image in this process (what synthgen-reader runs; fuzz targets use it directly).
-ImageData load_image_in_process(const std::string& path, ColorSpace space);
+ImageData load_image_in_process(const std::string& path, ColorSpace space, bool allow_nonfinite = false);
 /// load_image_in_process's result as the bytes synthgen-reader sends.
-std::vector<char> load_image_bytes(const std::string& path, ColorSpace space);
+std::vector<char> load_image_bytes(const std::string& path, ColorSpace space, bool allow_nonfinite = false);
 
 class Writer;
 class Reader;

@@ -1,6 +1,7 @@
 // Loads the OpenImageIO plugin (libsynthgen_oiio.so) on first use; see image_io.h.
 #include <dlfcn.h>
 
+#include <cmath>
 #include <filesystem>
 #include <mutex>
 
@@ -70,11 +71,19 @@ void check_regular_file(const std::string& path, const char* what) {
 
 }  // namespace
 
-ImageData load_image_in_process(const std::string& path, ColorSpace space) {
+static void check_finite(const ImageData& img, const std::string& what) {
+  for (float v : img.pixels)
+    if (!std::isfinite(v))
+      throw FileError(what, "image contains non-finite pixel values (NaN or infinity), which textures and "
+                            "environment maps cannot hold");
+}
+
+ImageData load_image_in_process(const std::string& path, ColorSpace space, bool allow_nonfinite) {
   check_regular_file(path, "an image");
   ImageData img;
   std::string err;
   if (!api().load(path.c_str(), int(space), &img, &err)) throw FileError(path, err);
+  if (!allow_nonfinite) check_finite(img, path);
   return img;
 }
 
@@ -97,17 +106,17 @@ ImageData read_image_data(Reader& r, const std::string& what) {
   return img;
 }
 
-std::vector<char> load_image_bytes(const std::string& path, ColorSpace space) {
+std::vector<char> load_image_bytes(const std::string& path, ColorSpace space, bool allow_nonfinite) {
   Writer w;
-  write_image_data(w, load_image_in_process(path, space));
+  write_image_data(w, load_image_in_process(path, space, allow_nonfinite));
   return std::move(w.bytes);
 }
 
-ImageData load_image(const std::string& path, ColorSpace space) {
+ImageData load_image(const std::string& path, ColorSpace space, bool allow_nonfinite) {
   check_regular_file(path, "an image");
   const char* names[] = {"auto", "srgb", "linear"};
-  Bytes bytes =
-      read_isolated(path, {"image", path, names[int(space)]}, [&] { return load_image_bytes(path, space); });
+  Bytes bytes = read_isolated(path, {"image", path, names[int(space)], allow_nonfinite ? "nonfinite" : "finite"},
+                              [&] { return load_image_bytes(path, space, allow_nonfinite); });
   Reader r(bytes, path);
   ImageData img = read_image_data(r, path);
   if (!r.done()) throw FileError(path, "malformed image from the isolated reader (trailing data)");
@@ -119,6 +128,7 @@ ImageData load_image_from_memory(const void* data, size_t size, const std::strin
   ImageData img;
   std::string err;
   if (!api().load_memory(data, size, format_hint.c_str(), &img, &err)) throw FileError(what, err);
+  check_finite(img, what);
   return img;
 }
 

@@ -1,7 +1,7 @@
 // synthgen-reader: decodes untrusted files in its own process (core/isolate.h).
 //
 //   synthgen-reader [--seconds S] [--memory BYTES] mesh PATH
-//   synthgen-reader [--seconds S] [--memory BYTES] image PATH auto|srgb|linear
+//   synthgen-reader [--seconds S] [--memory BYTES] image PATH auto|srgb|linear [finite|nonfinite]
 //   synthgen-reader [--seconds S] [--memory BYTES] --serve
 //
 // Sets its own CPU-time and address-space limits and reads files with the same code the
@@ -24,17 +24,17 @@ namespace {
 int usage() {
   std::fprintf(stderr,
                "usage: synthgen-reader [--seconds S] [--memory BYTES] mesh PATH\n"
-               "       synthgen-reader [--seconds S] [--memory BYTES] image PATH auto|srgb|linear\n"
+               "       synthgen-reader [--seconds S] [--memory BYTES] image PATH auto|srgb|linear [finite|nonfinite]\n"
                "       synthgen-reader [--seconds S] [--memory BYTES] --serve\n");
   return 2;
 }
 
 std::vector<char> dispatch(const std::vector<std::string>& args) {
   if (args.size() == 2 && args[0] == "mesh") return sg::import_mesh_file_bytes(args[1]);
-  if (args.size() == 3 && args[0] == "image") {
+  if ((args.size() == 3 || args.size() == 4) && args[0] == "image") {
     const std::string& s = args[2];
     sg::ColorSpace space = s == "srgb" ? sg::ColorSpace::SRGB : s == "linear" ? sg::ColorSpace::Linear : sg::ColorSpace::Auto;
-    return sg::load_image_bytes(args[1], space);
+    return sg::load_image_bytes(args[1], space, args.size() == 4 && args[3] == "nonfinite");
   }
   throw sg::Error("synthgen-reader: unknown request");
 }

@@ -17,6 +17,10 @@ out by workflow stage, a subpackage each:
 ``post``              image-space steps (exposure, ...)
 ``cli``               one module per ``synthgen`` command
 ====================  ===================================================================
+
+In memory and back: ``synthgen.Scenario(path).frames()`` renders frames as arrays and labels
+(:class:`synthgen.FrameData`) without files; ``synthgen.read_dataset(dir)`` reads a dataset
+back the same way (and as a torch ``Dataset`` when torch is installed).
 """
 from ._core import (  # noqa: F401
     FileError,
@@ -44,13 +48,31 @@ def _srgb8(self: RenderResult):
 
 
 RenderResult.srgb8 = _srgb8
+
+#: Public names imported on first use (they pull in the scenario and frame machinery).
+_LAZY = {"Scenario": ("frame.api", "Scenario"), "FrameData": ("frame.data", "FrameData"),
+         "read_dataset": ("outputs.read", "read_dataset"), "Dataset": ("outputs.read", "Dataset")}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(f"{__name__}.{module}"), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'synthgen' has no attribute {name!r}")
 from .scene import primitives, wear  # noqa: F401
 from .scene.scene_file import build_scene, load_scene  # noqa: F401
 
 __all__ = [
+    "Dataset",
     "FileError",
+    "FrameData",
     "PinholeCamera",
     "RenderResult",
+    "Scenario",
     "Scene",
     "SceneFileError",
     "SynthgenError",
@@ -63,6 +85,7 @@ __all__ = [
     "plugin_kinds",
     "plugin_names",
     "primitives",
+    "read_dataset",
     "read_image",
     "wear",
 ]

@@ -5,6 +5,8 @@
 - :mod:`.resources` -- what a worker keeps across frames (meshes, instance pools) and what
   lives one frame (generated textures and materials);
 - :mod:`.layout` -- placement with visibility checks (label-only renders, amodal masks);
-- :mod:`.records` -- placed objects, the frame's camera and the per-object metadata.
+- :mod:`.records` -- placed objects, the frame's camera and the per-object metadata;
+- :mod:`.api` -- :class:`synthgen.Scenario`: frames rendered in memory, as
+  :class:`synthgen.FrameData` (:mod:`.data`).
 """
 from .renderer import FrameRenderer, light_plugin  # noqa: F401

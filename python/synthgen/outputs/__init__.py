@@ -22,7 +22,8 @@ One module per format registers its output kinds (:mod:`.registry`): ``images`` 
 rgb_exr), ``depth`` (depth, depth16), ``masks`` (instance, semantic), ``surface`` (normal,
 albedo), ``coco``, ``yolo``, ``kitti``, ``meta``. Adding a format is one module here (found by :func:`discover`) plus its
 test. Infrastructure: :mod:`.registry`, :mod:`.files` (atomic writers), :mod:`.render` (the
-files of ``synthgen render``), :mod:`.verify` (``synthgen verify``), :mod:`.split` (the split).
+files of ``synthgen render``), :mod:`.verify` (``synthgen verify``), :mod:`.split` (the split),
+:mod:`.read` (:func:`synthgen.read_dataset`: a dataset back as arrays and labels).
 """
 from __future__ import annotations
 
@@ -34,7 +35,7 @@ from .registry import (Frame, OutputKind, default_outputs, finalize_dataset, fra
                        kind_names, kinds, register, write_frame)
 
 #: Modules of this package that are not output formats.
-INFRASTRUCTURE = ("registry", "files", "render", "verify", "split")
+INFRASTRUCTURE = ("registry", "files", "render", "verify", "split", "read")
 
 
 def format_modules() -> List[str]:
