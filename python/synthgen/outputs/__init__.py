@@ -35,7 +35,7 @@ from .registry import (Frame, OutputKind, default_outputs, finalize_dataset, fra
                        kind_names, kinds, register, write_frame)
 
 #: Modules of this package that are not output formats.
-INFRASTRUCTURE = ("registry", "files", "render", "verify", "split", "read")
+INFRASTRUCTURE = ("registry", "files", "render", "verify", "split", "read", "inspect")
 
 
 def format_modules() -> List[str]:
