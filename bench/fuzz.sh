@@ -27,9 +27,14 @@ if [ ! -f "$BUILD/CMakeCache.txt" ]; then
 fi
 cmake --build "$BUILD" -j "$JOBS" >> "$BUILD.log" 2>&1 || { tail -30 "$BUILD.log"; echo "fuzz_crashes=-1"; exit 1; }
 export SYNTHGEN_IMAGE_IO_PLUGIN="$PWD/$BUILD/libsynthgen_oiio.so"
+export SYNTHGEN_READER="$PWD/$BUILD/synthgen-reader"   # the instrumented reader (fuzz_mesh_import)
 # Leaks inside Debian's uninstrumented libraries are not ours; UBSan stops at the first report.
-export ASAN_OPTIONS="detect_leaks=0:allocator_may_return_null=1:${ASAN_OPTIONS:-}"
-export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:${UBSAN_OPTIONS:-}"
+# A sanitizer report exits with status 86 (how fuzz_mesh_import recognizes one from
+# synthgen-reader); SEGV is left to the default action (a crash inside uninstrumented assimp
+# in the reader is then a signal, which synthgen handles, not a report; libFuzzer catches a
+# SEGV of the target itself).
+export ASAN_OPTIONS="detect_leaks=0:allocator_may_return_null=1:exitcode=86:handle_segv=0:${ASAN_OPTIONS:-}"
+export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:exitcode=86:${UBSAN_OPTIONS:-}"
 
 seed_extra() {  # target -> extra seed files (third-party, not committed)
   case "$1" in

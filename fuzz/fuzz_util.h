@@ -17,7 +17,9 @@
 
 namespace fuzz {
 
+#ifndef SG_FUZZ_ISOLATED
 inline const int k_in_process = setenv("SYNTHGEN_NO_ISOLATION", "1", 1);
+#endif
 // Images of at most 4096^2 pixels (synthgen's own limit is 16384^2, 4 GiB of floats): the
 // same checks, within libFuzzer's 2 GiB memory limit.
 inline const int k_max_pixels = setenv("SYNTHGEN_MAX_IMAGE_PIXELS", "16777216", 1);

@@ -314,7 +314,7 @@ bool send_request(const Server& s, const std::vector<char>& request, int out_fd)
 }  // namespace
 
 Bytes read_isolated(const std::string& path, const std::vector<std::string>& args,
-                    const std::function<std::vector<char>()>& in_process) {
+                    const std::function<std::vector<char>()>& in_process, bool fresh) {
   if (isolation_disabled()) {
     try {
       return Bytes(in_process());
@@ -325,6 +325,12 @@ Bytes read_isolated(const std::string& path, const std::vector<std::string>& arg
     }
   }
   IsolationLimits limits;
+  if (fresh) {
+    std::vector<std::string> argv = {reader_executable(), "--seconds", std::to_string(limits.seconds), "--memory",
+                                     std::to_string(limits.memory_bytes)};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return run_isolated(path, argv, limits);
+  }
   Writer w;
   w.pod(uint32_t(args.size()));
   for (const std::string& a : args) w.str(a);

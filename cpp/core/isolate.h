@@ -62,11 +62,13 @@ Bytes run_isolated(const std::string& path, const std::vector<std::string>& argv
 /// library or executable holding this code. Throws Error if there is none.
 std::string reader_executable();
 
-/// Reads `path` with synthgen-reader's command `args` (run_isolated), or, with
-/// SYNTHGEN_NO_ISOLATION=1 in the environment (debugging, fuzzing), with `in_process` here.
-/// sg::Error from `in_process` becomes FileError(path, message).
+/// Reads `path` with synthgen-reader's command `args`, or, with SYNTHGEN_NO_ISOLATION=1 in the
+/// environment (debugging, fuzzing), with `in_process` here. sg::Error from `in_process`
+/// becomes FileError(path, message). `fresh`: a new reader process for this file alone
+/// (assimp: a reader that survived a file may have had its heap corrupted by it, so it is not
+/// reused), else a kept reader (image decoding: starting one loads OpenImageIO's libraries).
 Bytes read_isolated(const std::string& path, const std::vector<std::string>& args,
-                    const std::function<std::vector<char>()>& in_process);
+                    const std::function<std::vector<char>()>& in_process, bool fresh = false);
 
 /// The reader's side of the protocol: runs `work`, writes status and result (or the error
 /// message, with `path` removed from its front) to `fd`; returns the exit code.

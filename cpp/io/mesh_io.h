@@ -50,6 +50,10 @@ struct ImportedModel {
 /// Throws sg::FileError naming the file and the reason.
 ImportedModel import_mesh_file(const std::string& path);
 
+/// The checks import_mesh_file makes before assimp sees a file (a regular file; OBJ vertex
+/// lines, PLY headers, GLB headers); FileError naming the file and the reason.
+void check_mesh_file(const std::string& path);
+
 /// import_mesh_file in the synthgen-reader process with time and memory limits
 /// (core/isolate.h): a crash, hang or runaway allocation inside assimp becomes an
 /// sg::FileError. What the reader sends back is checked before use. Scene::load_mesh_file

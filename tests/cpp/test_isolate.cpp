@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iterator>
@@ -247,24 +248,46 @@ std::vector<pid_t> reader_children() {
 }  // namespace
 
 TEST(isolate, readers_are_reused_and_replaced_when_gone) {
-  std::string path = temp_file("reuse.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-  Scene s;
-  s.load_mesh_file(path);
+  // Image readers are kept (starting one loads OpenImageIO); model readers are not.
+  std::string ihdr = be32(2) + be32(1) + std::string("\x08\x02\x00\x00\x00", 5);
+  std::string raw = std::string("\x00\xff\x00\x00\x80\x80\x80", 7);
+  uint32_t a = 1, b = 0;
+  for (unsigned char ch : raw) {
+    a = (a + ch) % 65521;
+    b = (b + a) % 65521;
+  }
+  std::string z = std::string("\x78\x01\x01", 3) + char(raw.size()) + char(0) + char(~raw.size()) + char(0xff) + raw +
+                  be32((b << 16) | a);
+  std::string png = temp_file("reuse.png", std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) +
+                                               png_chunk("IDAT", z) + png_chunk("IEND", ""));
+  std::vector<pid_t> before = reader_children();
+  load_image(png, ColorSpace::Auto);
   std::vector<pid_t> first = reader_children();
-  ASSERT_EQ(first.size(), 1u);
-  for (int i = 0; i < 3; ++i) s.load_mesh_file(path);
+  ASSERT_EQ(first.size(), before.size() + 1);
+  pid_t kept = 0;
+  for (pid_t p : first)
+    if (std::find(before.begin(), before.end(), p) == before.end()) kept = p;
+  for (int i = 0; i < 3; ++i) load_image(png, ColorSpace::Auto);
   EXPECT_EQ(reader_children(), first);  // one reader, kept
   // A reader stopped from outside between requests is replaced; the file still loads.
-  kill(first[0], SIGKILL);
+  kill(kept, SIGKILL);
   usleep(100000);
-  EXPECT_NO_THROW(s.load_mesh_file(path));
+  EXPECT_NO_THROW(load_image(png, ColorSpace::Auto));
   std::vector<pid_t> now = reader_children();
-  ASSERT_EQ(now.size(), 1u);
-  EXPECT_NE(now[0], first[0]);
+  ASSERT_EQ(now.size(), first.size());
+  EXPECT_EQ(std::find(now.begin(), now.end(), kept), now.end());
   // An error in the reader (a bad file) keeps the reader; the next good file loads.
-  std::string bad = temp_file("bad.obj", "v 0 0 nan\nf 1 2 3\n");
-  std::string m = message_of([&] { s.load_mesh_file(bad); });
-  EXPECT_NE(m.find("bad.obj: line 1: vertex coordinate 3 is non-finite (NaN)"), std::string::npos) << m;
+  std::string bad = temp_file("bad.png", std::string("\x89PNG\r\n\x1a\n", 8) + std::string(40, 'x'));
+  EXPECT_NE(message_of([&] { load_image(bad, ColorSpace::Auto); }).find("bad.png: "), std::string::npos);
   EXPECT_EQ(reader_children(), now);
-  EXPECT_NO_THROW(s.load_mesh_file(path));
+  EXPECT_NO_THROW(load_image(png, ColorSpace::Auto));
+  // Model files get a reader of their own each, which is gone afterwards.
+  std::string obj = temp_file("reuse.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  Scene s;
+  s.load_mesh_file(obj);
+  s.load_mesh_file(obj);
+  EXPECT_EQ(reader_children(), now);
+  std::string nan_obj = temp_file("bad.obj", "v 0 0 nan\nf 1 2 3\n");
+  std::string m = message_of([&] { s.load_mesh_file(nan_obj); });
+  EXPECT_NE(m.find("bad.obj: line 1: vertex coordinate 3 is non-finite (NaN)"), std::string::npos) << m;
 }
