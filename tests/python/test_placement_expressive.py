@@ -141,3 +141,19 @@ def test_placement_mistakes_are_named(tmp_path, body, message):
     p.write_text(body)
     with pytest.raises(sg.SynthgenError, match=message):
         scenario.load_scenario(p)
+
+
+def test_what_rests_on_a_dropped_object_is_dropped_too(tmp_path):
+    """A table that must be half hidden (max_visible_fraction 0.01, impossible alone) is
+    dropped; the cups on it go with it instead of floating."""
+    body = """objects:
+  - {class: table, name: table, primitive: box, size: [1.6, 0.8, 1.0], count: 1, max_visible_fraction: 0.01}
+  - {class: cup, primitive: cylinder, size: [0.15, 0.2, 0.15], count: 2, rests_on: table}
+"""
+    for fr, arrays, meta in _frames(tmp_path, body, count=2):
+        recs = {o["class"]: o for o in meta["objects"]}
+        assert "dropped" in recs["table"]
+        for o in meta["objects"]:
+            if o["class"] == "cup":
+                assert o["dropped"] == "the object it rests on was dropped"
+        assert np.all(np.asarray(arrays["instance_id"]) == 0)

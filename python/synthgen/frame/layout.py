@@ -10,7 +10,7 @@ still fail are dropped (with the reason in the metadata).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -66,6 +66,8 @@ class Layout:
     spots: List[Optional[Tuple[float, float, float]]]
     dropped: Dict[int, str]
     attempts: int
+    #: object -> the object it rests on (rests_on)
+    rests: Dict[int, int] = field(default_factory=dict)
 
     def kept(self) -> List[bool]:
         return [s is not None and k not in self.dropped for k, s in enumerate(self.spots)]
@@ -140,9 +142,9 @@ def _on_ground(view: FrameView, camera: PinholeCamera, o: PlacedObject, rng: np.
 
 
 def _spots(view: FrameView, placement: Mapping[str, Any], rng: np.random.Generator,
-           camera: PinholeCamera) -> List[Optional[Spot]]:
+           camera: PinholeCamera, rests: Dict[int, int]) -> List[Optional[Spot]]:
     """A spot per object; None where an object found none. Objects resting on others are
-    placed after them, on the top of one of them chosen at random."""
+    placed after them, on the top of one of them chosen at random (``rests``: which)."""
     objects = view.objects
     order = sorted(range(len(objects)), key=lambda k: _depth(objects, k))
     ground: List[Tuple[float, float, float]] = []              # (x, z, radius) on the ground
@@ -174,6 +176,7 @@ def _spots(view: FrameView, placement: Mapping[str, Any], rng: np.random.Generat
                 z = sp[1] - math.sin(yaw) * lx + math.cos(yaw) * lz
                 if free(x, z, r, on_top.get(j, [])):
                     out[k] = (x, z, sp[2] + _top(s))
+                    rests[k] = j
                     on_top.setdefault(j, []).append((x, z, r))
                     break
             continue
@@ -248,7 +251,8 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
     attempts = 0
     for attempt in range(placement["max_retries"] + 1):
         attempts = attempt + 1
-        spots = _spots(view, placement, rng, camera)
+        rests: Dict[int, int] = {}
+        spots = _spots(view, placement, rng, camera, rests)
         for o, spot in zip(objects, spots):
             if spot is not None:
                 _put(view, o, spot)
@@ -274,11 +278,16 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
                     fails.append((k, f"visible fraction {frac:.3f} > {lim['max_visible_fraction']}"))
             view.show([s is not None for s in spots])
         if best is None or len(fails) < len(best[1]):
-            best = (spots, fails, [(o.world, o.post_world) for o in objects])
+            best = (spots, fails, [(o.world, o.post_world) for o in objects], rests)
         if not fails:
             break
-    spots, fails, worlds = best
+    spots, fails, worlds, rests = best
     for o, (world, post) in zip(objects, worlds):  # the best layout, posts included
         if world is not None:
             view.move(o, world, post)
-    return Layout(spots, {k: reason for k, reason in fails}, attempts)
+    dropped = {k: reason for k, reason in fails}
+    # What rests on a dropped object goes with it (it would float), down the stacks.
+    for k in sorted(rests, key=lambda k: _depth(objects, k)):
+        if rests[k] in dropped and k not in dropped:
+            dropped[k] = "the object it rests on was dropped"
+    return Layout(spots, dropped, attempts, rests)
