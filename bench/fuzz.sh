@@ -9,7 +9,9 @@
 # the core built with clang (ASan, UBSan, libFuzzer coverage) in build-fuzz/; fuzz_yaml is
 # the Python harness of scenario and scene-file validation (fuzz/fuzz_yaml.py, run with
 # .venv: `make install` first). Working corpora live in build-fuzz/corpus/<target>/, seeded
-# from fuzz/corpus/<target>/ (committed), Debian's assimp-testmodels and scenarios/; every
+# from fuzz/corpus/<target>/ (committed), Debian's assimp-testmodels, ../shared/assets (the
+# Cornell box's OBJ meshes, Kenney's GLB vehicles, their PNG/EXR images; files up to
+# 200 kB, larger ones as their first 64 kB) and scenarios/ (fuzz_yaml); every
 # crash input is copied to fuzz/corpus/<target>/crash-<sha1> (fix the bug, commit the input:
 # `make test` replays it).
 set -uo pipefail
@@ -44,6 +46,16 @@ seed_extra() {  # target -> extra seed files (third-party, not committed)
         case "$f" in *.obj) b=0;; *.ply) b=1;; *.gltf) b=2;; *.glb) b=3;; esac
         out="$2/assimp-$(sha1sum "$f" | cut -c1-12)"
         { printf "\\x0$b"; cat "$f"; } > "$out"
+      done
+      for f in $(find ../shared/assets -type f \( -name '*.obj' -o -name '*.glb' -o -name '*.gltf' -o -name '*.ply' \) 2>/dev/null); do
+        [ "$(stat -c %s "$f")" -lt 200000 ] || continue
+        case "$f" in *.obj) b=0;; *.ply) b=1;; *.gltf) b=2;; *.glb) b=3;; esac
+        { printf "\\x0$b"; cat "$f"; } > "$2/shared-$(sha1sum "$f" | cut -c1-12)"
+      done ;;
+    fuzz_image)  # high bit: through a file, as synthgen reads textures and photos
+      for f in $(find ../shared/assets -type f \( -name '*.png' -o -name '*.jpg' -o -name '*.exr' -o -name '*.hdr' \) 2>/dev/null); do
+        case "$f" in *.png) b=80;; *.jpg) b=81;; *.exr) b=82;; *.hdr) b=83;; esac
+        { printf "\\x$b"; head -c 65536 "$f"; } > "$2/shared-$(sha1sum "$f" | cut -c1-12)"
       done ;;
   esac
 }
@@ -90,7 +102,9 @@ if selected fuzz_yaml; then
   mkdir -p "$BUILD/corpus/$name" "$crashes_dir"
   log="$BUILD/$name.log"
   if [ -x .venv/bin/python ]; then
-    .venv/bin/python fuzz/fuzz_yaml.py --seconds "$SECONDS_PER_TARGET" --corpus "$BUILD/corpus/$name" \
+    # The package's own reader and image plugin: the instrumented ones are for the C++ targets
+    # (an ASan reader cannot start under the address-space limit fuzz_yaml.py sets).
+    env -u SYNTHGEN_READER -u SYNTHGEN_IMAGE_IO_PLUGIN .venv/bin/python fuzz/fuzz_yaml.py --seconds "$SECONDS_PER_TARGET" --corpus "$BUILD/corpus/$name" \
       --crashes "$crashes_dir" > "$log" 2>&1
   else
     echo "fuzz_yaml: .venv is missing (make install)" > "$log"
