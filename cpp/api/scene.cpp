@@ -266,6 +266,19 @@ void Scene::set_instance_visible(uint32_t id, bool visible) {
   m_structure_dirty = true;
 }
 
+void Scene::set_instance_catcher(uint32_t id, bool catcher) {
+  InstanceEntry& e = get_slot(m_instances, id, "instance");
+  if (e.catcher == catcher) return;
+  e.catcher = catcher;
+  e.dirty = true;
+  m_structure_dirty = true;
+}
+
+bool Scene::instance_catcher(uint32_t id) const {
+  if (id >= m_instances.size() || !m_instances[id]) throw Error("instance " + std::to_string(id) + " does not exist");
+  return m_instances[id]->catcher;
+}
+
 bool Scene::instance_visible(uint32_t id) const {
   if (id >= m_instances.size() || !m_instances[id]) throw Error("instance " + std::to_string(id) + " does not exist");
   return m_instances[id]->visible;
@@ -395,7 +408,7 @@ void Scene::commit() {
     auto& e = m_instances[i];
     if (!e || !e->dirty) continue;
     if (e->visible)
-      m_accel->set_instance(uint32_t(i), e->mesh_id, e->world_from_object);
+      m_accel->set_instance(uint32_t(i), e->mesh_id, e->world_from_object, e->catcher);
     else
       m_accel->remove_instance(uint32_t(i));  // hidden: out of the top level, mesh BVH kept
     e->dirty = false;
@@ -444,7 +457,9 @@ void Scene::build_render_scene() {
   rs.instances.assign(m_instances.size(), InstanceRecord{});
   m_instance_triangle_materials.assign(m_instances.size(), {});
   rs.lights.clear();
+  rs.light_in_catcher_layer.clear();
   rs.infinite_lights.clear();
+  rs.has_catchers = false;
   m_area_lights.clear();
   rs.bounds = Bounds3{};
 
@@ -468,6 +483,8 @@ void Scene::build_render_scene() {
     const MeshEntry& me = *m_meshes[e->mesh_id];
     InstanceRecord& r = rs.instances[i];
     r.active = true;
+    r.catcher = e->catcher;
+    rs.has_catchers = rs.has_catchers || e->catcher;
     r.mesh = me.mesh.get();
     r.world_from_object = e->world_from_object;
     r.class_id = e->class_id;
@@ -551,6 +568,7 @@ void Scene::build_render_scene() {
       r.light = light.get();
       r.light_index = int32_t(rs.lights.size());
       rs.lights.push_back(light.get());
+      rs.light_in_catcher_layer.push_back(e->catcher);
       m_area_lights.push_back(light);
     }
   }
@@ -559,6 +577,7 @@ void Scene::build_render_scene() {
     e->object->preprocess(rs.bounds);
     if (e->object->is_infinite()) rs.infinite_lights.push_back(uint32_t(rs.lights.size()));
     rs.lights.push_back(e->object.get());
+    rs.light_in_catcher_layer.push_back(1);
   }
   rs.has_hittable_emitters = !m_area_lights.empty() || !rs.infinite_lights.empty();
   std::vector<float> power;

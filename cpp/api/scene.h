@@ -103,6 +103,13 @@ class Scene {
   /// amodal masks (one object rendered alone) and by randomizers that toggle objects.
   void set_instance_visible(uint32_t id, bool visible);
   bool instance_visible(uint32_t id) const;
+  /// Makes an instance a shadow catcher: a stand-in of a photo's world (its ground, proxy
+  /// geometry) into which the other instances are inserted. When a scene has catchers, render()
+  /// also estimates, with the same samples, the radiance of the scene without the other
+  /// instances (differential rendering; Film::differential): what photo compositing needs
+  /// (synthgen.post.composite). Give catchers labels 0: they are the photo's, never labelled.
+  void set_instance_catcher(uint32_t id, bool catcher);
+  bool instance_catcher(uint32_t id) const;
   size_t instance_count() const;
   /// Live (not removed) textures and materials: for tools checking that a long run keeps
   /// its libraries bounded.
@@ -169,6 +176,7 @@ class Scene {
     int64_t material_id = -1;
     std::vector<std::pair<int32_t, int64_t>> material_map;  ///< mesh material id -> material id
     bool visible = true;
+    bool catcher = false;
     bool dirty = true;
   };
   const std::vector<std::optional<MeshEntry>>& meshes() const { return m_meshes; }

@@ -175,6 +175,7 @@ void Scene::save(const std::string& path) const {
     n.append_attribute("material") = static_cast<long long>(e.material_id);
     n.append_attribute("world_from_object") = fmt_floats(e.world_from_object.m.data(), 16).c_str();
     if (!e.visible) n.append_attribute("visible") = false;
+    if (e.catcher) n.append_attribute("catcher") = true;
     if (!e.material_map.empty()) {
       std::string map;
       for (const auto& [from, to] : e.material_map)
@@ -297,6 +298,7 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
                      n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
                      n.attribute("material").as_llong());
       if (!n.attribute("visible").as_bool(true)) s.set_instance_visible(uint32_t(id), false);
+      if (n.attribute("catcher").as_bool(false)) s.set_instance_catcher(uint32_t(id), true);
       if (n.attribute("material_map")) {
         std::vector<std::pair<int32_t, int64_t>> map;
         std::istringstream is(n.attribute("material_map").as_string());

@@ -235,6 +235,32 @@ PYBIND11_MODULE(_core, m) {
       "is decoded by synthgen-reader, a separate process with time and memory limits, so a corrupt\n"
       "or hostile file raises FileError naming it instead of crashing the caller.");
 
+  m.def(
+      "read_image_info",
+      [](const std::string& path, const std::string& color_space) {
+        ColorSpace space = color_space == "auto"     ? ColorSpace::Auto
+                           : color_space == "srgb"   ? ColorSpace::SRGB
+                           : color_space == "linear" ? ColorSpace::Linear
+                                                     : throw Error("read_image_info: color_space must be 'auto', "
+                                                                   "'srgb' or 'linear', got '" + color_space + "'");
+        ImageData img;
+        {
+          py::gil_scoped_release release;
+          img = load_image(path, space, false);
+        }
+        py::array_t<float> out({py::ssize_t(img.height), py::ssize_t(img.width), py::ssize_t(img.channels)});
+        std::memcpy(out.mutable_data(), img.pixels.data(), img.pixels.size() * sizeof(float));
+        py::dict info;
+        info["format"] = img.format;
+        info["orientation"] = img.orientation;
+        info["exif_focal_mm"] = img.exif_focal_mm;
+        info["exif_focal_35mm"] = img.exif_focal_35mm;
+        return py::make_tuple(out, info);
+      },
+      py::arg("path"), py::arg("color_space") = "auto",
+      "read_image (finite values) and what the file says about itself: (pixels, {format, orientation:\n"
+      "EXIF 1..8, not applied to the pixels; exif_focal_mm, exif_focal_35mm: 0 when absent}).");
+
   static py::exception<Error> base_exc(m, "SynthgenError", PyExc_ValueError);
   static py::exception<FileError> file_exc(m, "FileError", base_exc.ptr());
   py::register_exception_translator([](std::exception_ptr p) {
@@ -270,7 +296,7 @@ Camera space: x right, y down, z forward. A camera-space point (X, Y, Z) project
 u = fx X/Z + cx, v = fy Y/Z + cy and lands in pixel (floor(u), floor(v)); pixel (i, j)
 has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world space.)doc")
       .def(py::init([](float fx, float fy, float cx, float cy, uint32_t width, uint32_t height,
-                       const py::object& world_from_camera) {
+                       const py::object& world_from_camera, const std::array<float, 5>& distortion) {
              PinholeCamera c;
              c.fx = fx;
              c.fy = fy;
@@ -279,11 +305,17 @@ has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world spa
              c.width = width;
              c.height = height;
              c.world_from_camera = transform_from_py(world_from_camera, "world_from_camera");
+             c.k1 = distortion[0];
+             c.k2 = distortion[1];
+             c.p1 = distortion[2];
+             c.p2 = distortion[3];
+             c.k3 = distortion[4];
              c.validate();
              return c;
            }),
            py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"), py::arg("width"), py::arg("height"),
-           py::arg("world_from_camera") = py::none())
+           py::arg("world_from_camera") = py::none(), py::arg("distortion") = std::array<float, 5>{0, 0, 0, 0, 0},
+           "distortion: OpenCV's (k1, k2, p1, p2, k3); camera rays go through the distorted lens.")
       .def_static("from_params",
                   [](const py::dict& params) { return PinholeCamera::from_params(params_from_dict(params, "camera"), "camera"); },
                   py::arg("params"),
@@ -293,6 +325,22 @@ has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world spa
       .def_readonly("fy", &PinholeCamera::fy)
       .def_readonly("cx", &PinholeCamera::cx)
       .def_readonly("cy", &PinholeCamera::cy)
+      .def_property_readonly("distortion",
+                             [](const PinholeCamera& c) { return std::array<float, 5>{c.k1, c.k2, c.p1, c.p2, c.k3}; },
+                             "OpenCV distortion coefficients (k1, k2, p1, p2, k3).")
+      .def("distort",
+           [](const PinholeCamera& c, float x, float y) {
+             Vec2f d = c.distort({x, y});
+             return py::make_tuple(d.x, d.y);
+           },
+           py::arg("x"), py::arg("y"), "The distorted normalized point of normalized point (x, y) = (X/Z, Y/Z).")
+      .def("undistort",
+           [](const PinholeCamera& c, float x, float y) -> py::object {
+             Vec2f u;
+             if (!c.undistort({x, y}, &u)) return py::none();
+             return py::make_tuple(u.x, u.y);
+           },
+           py::arg("x"), py::arg("y"), "The normalized point that distorts to (x, y), or None (no convergence).")
       .def_readonly("width", &PinholeCamera::width)
       .def_readonly("height", &PinholeCamera::height)
       .def_property_readonly("world_from_camera", [](const PinholeCamera& c) { return transform_to_py(c.world_from_camera); })
@@ -357,6 +405,45 @@ has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world spa
       .def_property_readonly(
           "class_id", [](std::shared_ptr<Film> f) { return wrap(f, f->class_id, {f->height, f->width}); },
           "H x W uint32 class id of the first hit at the pixel centre (0: background).")
+      .def_property_readonly("differential", [](std::shared_ptr<Film> f) { return f->differential; },
+                             "True when the scene had catchers: the five buffers below are filled (else None).")
+      .def_property_readonly(
+          "synthetic_rgb",
+          [](std::shared_ptr<Film> f) -> py::object {
+            if (!f->differential) return py::none();
+            return wrap(f, f->synthetic_rgb, {f->height, f->width, 3});
+          },
+          "H x W x 3 float32: radiance of the samples whose camera ray first hit an inserted (non-catcher)\n"
+          "object, divided by all the pixel's samples (premultiplied by synthetic_alpha).")
+      .def_property_readonly(
+          "synthetic_alpha",
+          [](std::shared_ptr<Film> f) -> py::object {
+            if (!f->differential) return py::none();
+            return wrap(f, f->synthetic_alpha, {f->height, f->width});
+          },
+          "H x W float32: the fraction of samples whose camera ray first hit an inserted object.")
+      .def_property_readonly(
+          "catcher_with",
+          [](std::shared_ptr<Film> f) -> py::object {
+            if (!f->differential) return py::none();
+            return wrap(f, f->catcher_with, {f->height, f->width, 3});
+          },
+          "H x W x 3 float32: radiance of the other samples (catchers, background) with the objects.")
+      .def_property_readonly(
+          "catcher_without",
+          [](std::shared_ptr<Film> f) -> py::object {
+            if (!f->differential) return py::none();
+            return wrap(f, f->catcher_without, {f->height, f->width, 3});
+          },
+          "H x W x 3 float32: the same samples' radiance without the inserted objects (same random\n"
+          "numbers: equal to catcher_with bit for bit where the objects have no influence).")
+      .def_property_readonly(
+          "behind_synthetic",
+          [](std::shared_ptr<Film> f) -> py::object {
+            if (!f->differential) return py::none();
+            return wrap(f, f->behind_synthetic, {f->height, f->width, 3});
+          },
+          "H x W x 3 float32: the synthetic samples' radiance without the objects (what they hide).")
       .def_property_readonly(
           "stats", [](std::shared_ptr<Film> f) { return stats_to_dict(f->stats); },
           "Render statistics: timings, rays, samples, BVH builds of the last commit, ...");
@@ -542,6 +629,11 @@ a BVH build). render() commits pending edits first.)doc")
            "Hides (or shows again) an instance for every ray and for light sampling, keeping its BVH:\n"
            "toggling costs a top-level rebuild only.")
       .def("instance_visible", &Scene::instance_visible, py::arg("instance"))
+      .def("set_instance_catcher", &Scene::set_instance_catcher, py::arg("instance"), py::arg("catcher"),
+           "Makes an instance a shadow catcher: a stand-in of a photo's world (ground, proxy geometry) into\n"
+           "which the other instances are inserted. A scene with catchers renders differentially\n"
+           "(RenderResult.differential); give catchers labels 0.")
+      .def("instance_catcher", &Scene::instance_catcher, py::arg("instance"))
       .def("instance_count", &Scene::instance_count)
       .def("texture_count", &Scene::texture_count, "Live (not removed) textures.")
       .def("material_count", &Scene::material_count, "Live (not removed) materials.")

@@ -21,6 +21,11 @@ PluginInfo info() {
       .add(param::real("fy", "focal length in pixels along y").above(0).default_is("fx"))
       .add(param::real("cx", "principal point x in pixels").default_is("width / 2"))
       .add(param::real("cy", "principal point y in pixels").default_is("height / 2"))
+      .add(param::real("k1", 0.0, "radial distortion coefficient k1 (OpenCV model; rays go through the distorted lens)"))
+      .add(param::real("k2", 0.0, "radial distortion coefficient k2"))
+      .add(param::real("p1", 0.0, "tangential distortion coefficient p1"))
+      .add(param::real("p2", 0.0, "tangential distortion coefficient p2"))
+      .add(param::real("k3", 0.0, "radial distortion coefficient k3"))
       .add(param::matrix4("world_from_camera", "camera-to-world pose (row-major 4x4; default: the identity)"))
       .exclusive_of({"fov_y"}, {"fx", "fy", "cx", "cy"})
       .requires_all("fy", {"fx"})
@@ -35,15 +40,24 @@ std::shared_ptr<PinholeCamera> create(const Params& p, const PluginContext&) {
     wfc = Transform::from_row_major(m.data(), "world_from_camera");
   }
   uint32_t w = uint32_t(p.get_int("width")), h = uint32_t(p.get_int("height"));
-  if (!p.has("fx")) return std::make_shared<PinholeCamera>(PinholeCamera::from_fov(p.get_float("fov_y"), w, h, wfc));
-  auto c = std::make_shared<PinholeCamera>();
-  c->fx = p.get_float("fx");
-  c->fy = p.get_float_or("fy", c->fx);
-  c->cx = p.get_float_or("cx", 0.5f * float(w));
-  c->cy = p.get_float_or("cy", 0.5f * float(h));
-  c->width = w;
-  c->height = h;
-  c->world_from_camera = wfc;
+  std::shared_ptr<PinholeCamera> c;
+  if (!p.has("fx")) {
+    c = std::make_shared<PinholeCamera>(PinholeCamera::from_fov(p.get_float("fov_y"), w, h, wfc));
+  } else {
+    c = std::make_shared<PinholeCamera>();
+    c->fx = p.get_float("fx");
+    c->fy = p.get_float_or("fy", c->fx);
+    c->cx = p.get_float_or("cx", 0.5f * float(w));
+    c->cy = p.get_float_or("cy", 0.5f * float(h));
+    c->width = w;
+    c->height = h;
+    c->world_from_camera = wfc;
+  }
+  c->k1 = p.get_float("k1");
+  c->k2 = p.get_float("k2");
+  c->p1 = p.get_float("p1");
+  c->p2 = p.get_float("p2");
+  c->k3 = p.get_float("k3");
   c->validate();
   return c;
 }

@@ -8,7 +8,7 @@
 
 namespace sg {
 
-void Film::allocate(uint32_t w, uint32_t h) {
+void Film::allocate(uint32_t w, uint32_t h, bool diff) {
   width = w;
   height = h;
   size_t n = size_t(w) * h;
@@ -22,10 +22,17 @@ void Film::allocate(uint32_t w, uint32_t h) {
     albedo.assign(3 * n, 0.f);
     instance_id.assign(n, 0u);
     class_id.assign(n, 0u);
+    differential = diff;
+    for (auto* v : {&synthetic_rgb, &catcher_with, &catcher_without, &behind_synthetic}) {
+      if (diff) v->assign(3 * n, 0.f);
+      else std::vector<float>().swap(*v);
+    }
+    if (diff) synthetic_alpha.assign(n, 0.f);
+    else std::vector<float>().swap(synthetic_alpha);
   } catch (const std::bad_alloc&) {
     *this = Film();
     throw Error("render: cannot allocate the buffers of a " + std::to_string(w) + " x " + std::to_string(h) +
-                " image (" + std::to_string(n * 56 / (1 << 20)) + " MiB): not enough memory");
+                " image (" + std::to_string(n * (diff ? 108 : 56) / (1 << 20)) + " MiB): not enough memory");
   }
 }
 

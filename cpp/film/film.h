@@ -33,9 +33,23 @@ struct Film {
   std::vector<float> albedo;    ///< H x W x 3
   std::vector<uint32_t> instance_id;  ///< H x W, 0 = background
   std::vector<uint32_t> class_id;     ///< H x W, 0 = background
+
+  /// Differential rendering (scenes with catchers, Scene::set_instance_catcher), per pixel,
+  /// each the sum over the pixel's valid samples divided by their number. A sample is
+  /// "synthetic" when its camera ray first hits a non-catcher instance (an inserted object);
+  /// the others hit a catcher or nothing. Every sample is traced twice with the same random
+  /// numbers: in the full scene and in the scene without the inserted objects; a path that
+  /// never met an inserted object (hit, shadow ray, light) is the same path in both, so pixels
+  /// the objects do not influence have catcher_with == catcher_without bit for bit.
+  bool differential = false;
+  std::vector<float> synthetic_rgb;     ///< H x W x 3, full-scene radiance of synthetic samples
+  std::vector<float> synthetic_alpha;   ///< H x W, fraction of synthetic samples
+  std::vector<float> catcher_with;      ///< H x W x 3, full-scene radiance of the other samples
+  std::vector<float> catcher_without;   ///< H x W x 3, their radiance without the inserted objects
+  std::vector<float> behind_synthetic;  ///< H x W x 3, synthetic samples' radiance without the objects
   RenderStats stats;
 
-  void allocate(uint32_t w, uint32_t h);
+  void allocate(uint32_t w, uint32_t h, bool differential = false);
 };
 
 }  // namespace sg

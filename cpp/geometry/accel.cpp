@@ -149,7 +149,7 @@ void Accel::set_alpha_test(AlphaTest test, const void* user) {
 
 uint64_t Accel::alpha_test_calls() const { return m_impl->alpha_calls.load(std::memory_order_relaxed); }
 
-void Accel::set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object) {
+void Accel::set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object, bool catcher) {
   auto mit = m_impl->meshes.find(mesh_slot);
   if (mit == m_impl->meshes.end()) throw Error("instance refers to mesh " + std::to_string(mesh_slot) + " which has no BVH");
   RTCGeometry geom;
@@ -166,6 +166,8 @@ void Accel::set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform
   float m34[12];
   for (int i = 0; i < 12; ++i) m34[i] = world_from_object.m[i];
   rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, m34);
+  // Full-scene rays (mask all) see every instance; catcher-layer rays (mask 0x2) only catchers.
+  rtcSetGeometryMask(geom, catcher ? 0x3u : 0x1u);
   rtcCommitGeometry(geom);
 }
 
@@ -185,7 +187,7 @@ void Accel::commit() {
   if (!m_impl->last_error.empty()) throw Error("Embree: " + m_impl->last_error);
 }
 
-bool Accel::intersect(const Ray& ray, RayHit* hit) const {
+bool Accel::intersect(const Ray& ray, RayHit* hit, RayLayer layer) const {
   QueryContext ctx;
   init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   RTCRayHit rh;
@@ -198,7 +200,7 @@ bool Accel::intersect(const Ray& ray, RayHit* hit) const {
   rh.ray.tnear = 0.f;
   rh.ray.tfar = ray.t_max;
   rh.ray.time = 0.f;
-  rh.ray.mask = 0xffffffffu;
+  rh.ray.mask = uint32_t(layer);
   rh.ray.id = 0;
   rh.ray.flags = 0;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
@@ -214,7 +216,7 @@ bool Accel::intersect(const Ray& ray, RayHit* hit) const {
   return true;
 }
 
-bool Accel::occluded(const Ray& ray) const {
+bool Accel::occluded(const Ray& ray, RayLayer layer) const {
   QueryContext ctx;
   init_context(&ctx, m_impl->alpha_test, m_impl->alpha_user);
   RTCRay r;
@@ -227,7 +229,7 @@ bool Accel::occluded(const Ray& ray) const {
   r.tnear = 0.f;
   r.tfar = ray.t_max;
   r.time = 0.f;
-  r.mask = 0xffffffffu;
+  r.mask = uint32_t(layer);
   r.id = 0;
   r.flags = 0;
   rtcOccluded1(m_impl->top, &ctx.embree, &r);
@@ -239,7 +241,7 @@ namespace {
 
 // Fills an Embree SoA ray packet of width N from the lanes listed in `lanes`.
 template <int N, class R>
-void fill_rays(const RayPacket& rays, const int* lanes, int n, R& r, int* valid) {
+void fill_rays(const RayPacket& rays, const int* lanes, int n, R& r, int* valid, uint32_t mask) {
   for (int k = 0; k < N; ++k) {
     int i = lanes[k < n ? k : 0];
     valid[k] = k < n ? -1 : 0;
@@ -252,7 +254,7 @@ void fill_rays(const RayPacket& rays, const int* lanes, int n, R& r, int* valid)
     r.tnear[k] = 0.f;
     r.tfar[k] = rays.t_max[i];
     r.time[k] = 0.f;
-    r.mask[k] = 0xffffffffu;
+    r.mask[k] = mask;
     r.id[k] = 0;
     r.flags[k] = 0;
   }
@@ -279,7 +281,7 @@ void scatter_hits(const RH& rh, const int* lanes, int n, HitPacket* hits) {
 // used (a 16-wide traversal costs the same for 5 rays as for 16), and a packet query costs
 // about as much as a few single-ray queries, so at most 3 lanes are traced as single rays
 // (measured with bench/embree_cbox.py).
-void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
+void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits, RayLayer layer) const {
   int lanes[k_packet_size];
   int n = 0;
   for (int i = 0; i < k_packet_size; ++i) {
@@ -288,7 +290,7 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
   }
   if (n == 0) return;
   if (n <= 3) {
-    for (int k = 0; k < n; ++k) hits->found[lanes[k]] = intersect(rays.get(lanes[k]), &hits->hit[lanes[k]]);
+    for (int k = 0; k < n; ++k) hits->found[lanes[k]] = intersect(rays.get(lanes[k]), &hits->hit[lanes[k]], layer);
     return;
   }
   QueryContext ctx;
@@ -296,7 +298,7 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
   if (n <= 8) {
     alignas(32) RTCRayHit8 rh;
     alignas(32) int valid[8];
-    fill_rays<8>(rays, lanes, n, rh.ray, valid);
+    fill_rays<8>(rays, lanes, n, rh.ray, valid, uint32_t(layer));
     for (int k = 0; k < 8; ++k) {
       rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
@@ -307,7 +309,7 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
   } else {
     alignas(64) RTCRayHit16 rh;
     alignas(64) int valid[16];
-    fill_rays<16>(rays, lanes, n, rh.ray, valid);
+    fill_rays<16>(rays, lanes, n, rh.ray, valid, uint32_t(layer));
     for (int k = 0; k < 16; ++k) {
       rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
@@ -318,7 +320,7 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits) const {
   }
 }
 
-void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size]) const {
+void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size], RayLayer layer) const {
   int lanes[k_packet_size];
   int n = 0;
   for (int i = 0; i < k_packet_size; ++i) {
@@ -327,7 +329,7 @@ void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size])
   }
   if (n == 0) return;
   if (n <= 3) {
-    for (int k = 0; k < n; ++k) occluded[lanes[k]] = this->occluded(rays.get(lanes[k]));
+    for (int k = 0; k < n; ++k) occluded[lanes[k]] = this->occluded(rays.get(lanes[k]), layer);
     return;
   }
   QueryContext ctx;
@@ -335,14 +337,14 @@ void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size])
   if (n <= 8) {
     alignas(32) RTCRay8 r;
     alignas(32) int valid[8];
-    fill_rays<8>(rays, lanes, n, r, valid);
+    fill_rays<8>(rays, lanes, n, r, valid, uint32_t(layer));
     rtcOccluded8(valid, m_impl->top, &ctx.embree, &r);
     if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
     for (int k = 0; k < n; ++k) occluded[lanes[k]] = r.tfar[k] < 0.f;
   } else {
     alignas(64) RTCRay16 r;
     alignas(64) int valid[16];
-    fill_rays<16>(rays, lanes, n, r, valid);
+    fill_rays<16>(rays, lanes, n, r, valid, uint32_t(layer));
     rtcOccluded16(valid, m_impl->top, &ctx.embree, &r);
     if (ctx.calls) m_impl->alpha_calls.fetch_add(ctx.calls, std::memory_order_relaxed);
     for (int k = 0; k < n; ++k) occluded[lanes[k]] = r.tfar[k] < 0.f;

@@ -47,6 +47,13 @@ struct HitPacket {
   bool found[k_packet_size];
 };
 
+/// Which instances a query sees. Every instance belongs to the full scene; catcher instances
+/// (stand-ins of a photo's world: its ground, proxy geometry; see Scene::set_instance_catcher)
+/// also to the catcher layer, which differential rendering traces as "the scene without the
+/// inserted objects". NOTE: Embree ray masks (rtcSetGeometryMask; Debian's Embree has
+/// RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED): an instance is seen when ray mask & geometry mask != 0.
+enum class RayLayer : uint32_t { all = 0xffffffffu, catchers = 0x2u };
+
 /// Alpha test of a candidate hit (cut-outs): instance slot, triangle, barycentrics (u, v)
 /// of vertices 1 and 2. Returns false when the hit is to be ignored (no surface there).
 /// Called from inside Embree traversal, for meshes built with needs_alpha_test only, by
@@ -71,18 +78,19 @@ class Accel {
   /// Installs the alpha test used for meshes built with needs_alpha_test (null: accept all).
   void set_alpha_test(AlphaTest test, const void* user);
   void release_mesh(uint32_t mesh_slot);
-  /// Adds or updates the top-level instance `inst_slot` of mesh `mesh_slot`.
-  void set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object);
+  /// Adds or updates the top-level instance `inst_slot` of mesh `mesh_slot`; a `catcher`
+  /// instance is also seen by RayLayer::catchers queries.
+  void set_instance(uint32_t inst_slot, uint32_t mesh_slot, const Transform& world_from_object, bool catcher = false);
   void remove_instance(uint32_t inst_slot);
   /// Rebuilds the top-level BVH (cheap: one leaf per instance).
   void commit();
 
-  bool intersect(const Ray& ray, RayHit* hit) const;
-  bool occluded(const Ray& ray) const;
+  bool intersect(const Ray& ray, RayHit* hit, RayLayer layer = RayLayer::all) const;
+  bool occluded(const Ray& ray, RayLayer layer = RayLayer::all) const;
   /// Packet versions: identical results per lane to intersect() / occluded(). Sparse
   /// packets (at most 3 active lanes) are traced as single rays.
-  void intersect_packet(const RayPacket& rays, HitPacket* hits) const;
-  void occluded_packet(const RayPacket& rays, bool occluded[k_packet_size]) const;
+  void intersect_packet(const RayPacket& rays, HitPacket* hits, RayLayer layer = RayLayer::all) const;
+  void occluded_packet(const RayPacket& rays, bool occluded[k_packet_size], RayLayer layer = RayLayer::all) const;
 
   /// Number of bottom-level (per-mesh) BVH builds since construction.
   uint64_t mesh_builds() const { return m_mesh_builds; }

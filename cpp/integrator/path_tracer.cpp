@@ -90,6 +90,11 @@ struct PathState {
   float eta_scale = 1.f;
   bool active = true;
   bool hit_geometry = false;
+  /// Differential rendering (full-scene pass): the camera ray first hit an inserted
+  /// (non-catcher) object; the path met an inserted object somewhere (a hit, a shadow ray it
+  /// blocked, its emission sampled), so the path without the objects differs.
+  bool synthetic_first = false;
+  bool touched = false;
   float cone_width = 0.f, cone_spread = 0.f;  ///< ray cone for texture filtering (ray_cone.h)
 };
 
@@ -156,10 +161,17 @@ class PathTracer {
   /// The current ray hit a surface: add emission, prepare a shadow ray for next-event
   /// estimation (returns true and fills `shadow`), and sample the next direction (or end
   /// the path by clearing `st.active`).
-  bool on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow) const {
+  /// `layer`: RayLayer::catchers for the pass without the inserted objects (their lights are
+  /// then skipped too); `track` marks in the full-scene pass what the objects change.
+  bool on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow,
+              RayLayer layer, bool track) const {
     const RenderScene& sc = m_scene;
     if (st.bounce == 0) st.hit_geometry = true;
     const InstanceRecord& inst = sc.instances[hit.inst];
+    if (track && !inst.catcher) {
+      st.touched = true;
+      if (st.bounce == 0) st.synthetic_first = true;
+    }
     const Material* mat = sc.material_of(inst, hit.prim);
     const Material::Traits traits = mat->traits();
     const uint32_t needs = traits.needs;
@@ -203,9 +215,11 @@ class PathTracer {
       float pick_pmf;
       size_t li = sc.light_pick.sample(u_pick_lobe.x, &pick_pmf);
       const Light* light = sc.lights[li];
+      // Without the inserted objects their emitters are absent: the same choice adds nothing.
+      const bool light_absent = layer == RayLayer::catchers && !sc.light_in_catcher_layer[li];
       LightSample ls;
       LightSampleContext ctx{si.p, si.p_error};
-      if (light->sample(ctx, sampler.get_2d_keyed(keys.light), &ls)) {
+      if (!light_absent && light->sample(ctx, sampler.get_2d_keyed(keys.light), &ls)) {
         float bsdf_pdf;
         Color f = mat->eval_pdf(si, wo, ls.wi, &bsdf_pdf);
         if (!is_black(f)) {
@@ -222,6 +236,7 @@ class PathTracer {
           float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);
           st.shadow_contrib = st.beta * f * ls.li * (w / light_pdf);
           shadow_requested = true;
+          if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
         }
       }
     }
@@ -257,20 +272,21 @@ class PathTracer {
     return shadow_requested;
   }
 
-  /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size; returns the sum of the valid
-  /// sample radiances, the number of valid samples and of camera-ray hits.
-  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, Color* sum, uint32_t* valid, uint32_t* hits,
-                    PathCounters& counters) const {
+  /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size, of the lanes i < n with
+  /// lane_on[i] (all when null), in the scene `layer`; fills per lane the final path state
+  /// (radiance L, hit_geometry, and with `track` synthetic_first / touched).
+  void trace_lanes(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, const bool* lane_on, RayLayer layer, bool track,
+                   PathState* st, PathCounters& counters) const {
     const RenderScene& sc = m_scene;
     uint64_t pixel = uint64_t(y) * sc.camera.width + x;
     constexpr int W = k_packet_size;
-    PathState st[W];
     PixelSampler samplers[W];
     uint64_t pixel_key = 0;
     for (uint32_t i = 0; i < uint32_t(W); ++i) {
+      st[i] = PathState();
       samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_s.spp);
       if (i == 0) pixel_key = samplers[0].pair_key(0);
-      if (i >= n) {
+      if (i >= n || (lane_on && !lane_on[i])) {
         st[i].active = false;
         continue;
       }
@@ -294,7 +310,7 @@ class PathTracer {
       }
       if (!n_active) break;
       HitPacket hp;
-      sc.accel->intersect_packet(rays, &hp);
+      sc.accel->intersect_packet(rays, &hp, layer);
       counters.rays += n_active;
       RayPacket shadows;
       uint32_t n_shadow = 0;
@@ -306,19 +322,47 @@ class PathTracer {
           continue;
         }
         Ray shadow;
-        if (on_hit(st[i], hp.hit[i], samplers[i], keys, &shadow)) {
+        if (on_hit(st[i], hp.hit[i], samplers[i], keys, &shadow, layer, track)) {
           shadows.set(i, shadow);
           ++n_shadow;
         }
       }
       if (n_shadow) {
         bool occluded[W];
-        sc.accel->occluded_packet(shadows, occluded);
+        sc.accel->occluded_packet(shadows, occluded, layer);
         counters.rays += n_shadow;
+        if (track) {
+          // A shadow ray blocked in the full scene but not by catchers: an inserted object
+          // casts this shadow.
+          RayPacket blocked;
+          uint32_t n_blocked = 0;
+          for (int i = 0; i < W; ++i) {
+            blocked.valid[i] = 0;
+            if (shadows.valid[i] && occluded[i] && !st[i].touched) {
+              blocked.set(i, shadows.get(i));
+              ++n_blocked;
+            }
+          }
+          if (n_blocked) {
+            bool by_catchers[W];
+            sc.accel->occluded_packet(blocked, by_catchers, RayLayer::catchers);
+            counters.rays += n_blocked;
+            for (int i = 0; i < W; ++i)
+              if (blocked.valid[i] && !by_catchers[i]) st[i].touched = true;
+          }
+        }
         for (int i = 0; i < W; ++i)
           if (shadows.valid[i] && !occluded[i]) st[i].L += st[i].shadow_contrib;
       }
     }
+  }
+
+  /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size; returns the sum of the valid
+  /// sample radiances, the number of valid samples and of camera-ray hits.
+  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, Color* sum, uint32_t* valid, uint32_t* hits,
+                    PathCounters& counters) const {
+    PathState st[k_packet_size];
+    trace_lanes(x, y, s0, n, nullptr, RayLayer::all, false, st, counters);
     for (uint32_t i = 0; i < n; ++i) {
       *hits += st[i].hit_geometry;
       if (!is_finite(st[i].L)) {
@@ -327,6 +371,48 @@ class PathTracer {
       }
       *sum += st[i].L;
       ++*valid;
+    }
+  }
+
+  /// Per-pixel sums of differential rendering (Film::differential).
+  struct DifferentialSums {
+    Color full{0.f}, synthetic{0.f}, with{0.f}, without{0.f}, behind{0.f};
+    uint32_t valid = 0, hits = 0, synthetic_n = 0;
+  };
+
+  /// Samples [s0, s0 + n) traced in the full scene and, where a path met an inserted object,
+  /// again without the objects (same random numbers: common random numbers, so the difference
+  /// of the two estimates is exactly 0 where the objects have no influence).
+  void trace_packet_differential(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, DifferentialSums* d,
+                                 PathCounters& counters) const {
+    constexpr int W = k_packet_size;
+    PathState full[W], without[W];
+    trace_lanes(x, y, s0, n, nullptr, RayLayer::all, true, full, counters);
+    bool again[W];
+    bool any = false;
+    for (int i = 0; i < W; ++i) {
+      again[i] = uint32_t(i) < n && full[i].touched;
+      any = any || again[i];
+    }
+    if (any) trace_lanes(x, y, s0, n, again, RayLayer::catchers, false, without, counters);
+    for (uint32_t i = 0; i < n; ++i) {
+      d->hits += full[i].hit_geometry;
+      const Color& lf = full[i].L;
+      const Color& lw = again[i] ? without[i].L : full[i].L;
+      if (!is_finite(lf) || !is_finite(lw)) {
+        ++counters.nan;
+        continue;
+      }
+      d->full += lf;
+      ++d->valid;
+      if (full[i].synthetic_first) {
+        d->synthetic += lf;
+        d->behind += lw;
+        ++d->synthetic_n;
+      } else {
+        d->with += lf;
+        d->without += lw;
+      }
     }
   }
 
@@ -379,7 +465,8 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
   settings.validate();
   scene.camera.validate();
   const uint32_t w = scene.camera.width, h = scene.camera.height;
-  film->allocate(w, h);
+  const bool differential = scene.has_catchers && !settings.labels_only;
+  film->allocate(w, h, differential);
   PathTracer pt(scene, settings);
   std::atomic<uint64_t> rays{0}, nans{0};
   auto t0 = std::chrono::steady_clock::now();
@@ -399,6 +486,29 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
               bool centre_hit = pt.labels(x, y, film, c);
               if (settings.labels_only) {
                 film->alpha[pixel] = centre_hit ? 1.f : 0.f;
+                continue;
+              }
+              if (differential) {
+                PathTracer::DifferentialSums d;
+                for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
+                  pt.trace_packet_differential(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &d, c);
+                const float inv = d.valid ? 1.f / float(d.valid) : 0.f;
+                auto put = [&](std::vector<float>& buf, const Color& v) {
+                  buf[3 * pixel] = v.x * inv;
+                  buf[3 * pixel + 1] = v.y * inv;
+                  buf[3 * pixel + 2] = v.z * inv;
+                };
+                // NOTE: rgb divides like the plain path (sum / valid) so that it equals a plain render's.
+                Color full = d.valid ? d.full / float(d.valid) : Color(0.f);
+                film->rgb[3 * pixel] = full.x;
+                film->rgb[3 * pixel + 1] = full.y;
+                film->rgb[3 * pixel + 2] = full.z;
+                put(film->synthetic_rgb, d.synthetic);
+                put(film->catcher_with, d.with);
+                put(film->catcher_without, d.without);
+                put(film->behind_synthetic, d.behind);
+                film->synthetic_alpha[pixel] = float(d.synthetic_n) * inv;
+                film->alpha[pixel] = float(d.hits) / float(settings.spp);
                 continue;
               }
               Color sum(0.f);

@@ -17,6 +17,7 @@ namespace sg {
 
 struct InstanceRecord {
   bool active = false;
+  bool catcher = false;  ///< a stand-in of the photo's world (Scene::set_instance_catcher)
   const TriangleMesh* mesh = nullptr;
   Transform world_from_object;
   uint32_t class_id = 0, instance_id = 0;
@@ -38,6 +39,9 @@ struct RenderScene {
   const Accel* accel = nullptr;
   std::vector<InstanceRecord> instances;  ///< indexed by instance slot (= Embree instance id)
   std::vector<const Light*> lights;
+  /// Per light: 1 when it exists without the inserted objects (lights of the scene, area lights
+  /// of catchers), 0 for the emitters of inserted objects (their headlamps).
+  std::vector<char> light_in_catcher_layer;
   Distribution1D light_pick;
   std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
   PinholeCamera camera;
@@ -45,6 +49,8 @@ struct RenderScene {
   /// False when no ray can pick up emission by hitting something (no emissive surfaces,
   /// no infinite lights): paths then end right after their last light sample.
   bool has_hittable_emitters = false;
+  /// Some instance is a catcher: render differentially (Film::differential).
+  bool has_catchers = false;
 
   const Material* material_of(const InstanceRecord& inst, uint32_t prim) const {
     if (!inst.override_material && inst.triangle_materials) {

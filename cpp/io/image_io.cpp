@@ -110,6 +110,12 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
   *is_float = spec.format.basetype == OIIO::TypeDesc::FLOAT || spec.format.basetype == OIIO::TypeDesc::HALF ||
               spec.format.basetype == OIIO::TypeDesc::DOUBLE;
   *alpha_channel = spec.alpha_channel;
+  img->format = in->format_name();
+  int orientation = spec.get_int_attribute("Orientation", 1);
+  img->orientation = orientation >= 1 && orientation <= 8 ? orientation : 1;
+  auto positive = [](float f) { return std::isfinite(f) && f > 0.f && f < 1e5f ? f : 0.f; };
+  img->exif_focal_mm = positive(spec.get_float_attribute("Exif:FocalLength", 0.f));
+  img->exif_focal_35mm = positive(spec.get_float_attribute("Exif:FocalLengthIn35mmFilm", 0.f));
   return true;  // non-finite values are checked by the core where they are not allowed
 }
 

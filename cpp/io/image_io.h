@@ -19,6 +19,11 @@ enum class ColorSpace { Auto = 0, SRGB = 1, Linear = 2 };
 struct ImageData {
   int width = 0, height = 0, channels = 0;
   std::vector<float> pixels;
+  // What the file says about itself (files read by load_image; empty / defaults otherwise).
+  std::string format;          ///< OpenImageIO's format name ("jpeg", "png", "openexr", ...)
+  int orientation = 1;         ///< EXIF orientation 1..8 (not applied to `pixels`)
+  float exif_focal_mm = 0.f;   ///< EXIF FocalLength, millimetres (0: absent)
+  float exif_focal_35mm = 0.f; ///< EXIF FocalLengthIn35mmFilm, millimetres (0: absent)
 };
 
 /// Reads an image. With ColorSpace::Auto, 8/16-bit integer formats (PNG, JPEG, TIFF)
@@ -65,7 +70,7 @@ struct ImageIoApi {
   bool (*load_memory)(const void* data, size_t size, const char* hint, ImageData* out, std::string* error);
   bool (*save)(const char* path, const ImageData* image, int bits, std::string* error);
 };
-constexpr int k_image_io_api_version = 1;
+constexpr int k_image_io_api_version = 2;
 
 }  // namespace sg
 

@@ -92,6 +92,10 @@ void write_image_data(Writer& w, const ImageData& image) {
   w.pod(int32_t(image.height));
   w.pod(int32_t(image.channels));
   w.vec(image.pixels);
+  w.str(image.format);
+  w.pod(int32_t(image.orientation));
+  w.pod(image.exif_focal_mm);
+  w.pod(image.exif_focal_35mm);
 }
 
 ImageData read_image_data(Reader& r, const std::string& what) {
@@ -100,6 +104,13 @@ ImageData read_image_data(Reader& r, const std::string& what) {
   img.height = r.pod<int32_t>();
   img.channels = r.pod<int32_t>();
   img.pixels = r.vec<float>();
+  img.format = r.str();
+  img.orientation = r.pod<int32_t>();
+  img.exif_focal_mm = r.pod<float>();
+  img.exif_focal_35mm = r.pod<float>();
+  if (img.orientation < 1 || img.orientation > 8 || !std::isfinite(img.exif_focal_mm) ||
+      !std::isfinite(img.exif_focal_35mm))
+    throw FileError(what, "malformed image from the isolated reader (its EXIF fields)");
   if (img.width < 0 || img.height < 0 || img.channels < 0 ||
       img.pixels.size() != size_t(img.width) * size_t(img.height) * size_t(img.channels))
     throw FileError(what, "malformed image from the isolated reader");

@@ -187,3 +187,60 @@ TEST(camera, validate) {
   c.height = 0;
   EXPECT_THROW(c.validate(), Error);
 }
+
+namespace {
+
+/// OpenCV's distortion evaluated independently in double (cv::projectPoints' formula).
+void opencv_distort(double k1, double k2, double p1, double p2, double k3, double x, double y, double* xd, double* yd) {
+  double r2 = x * x + y * y;
+  double radial = 1 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+  *xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x);
+  *yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y;
+}
+
+}  // namespace
+
+// Barrel (a wide-angle dashcam's) and pincushion distortion with tangential terms.
+TEST(camera, distortion_is_opencvs_and_rays_invert_it) {
+  const float coeffs[2][5] = {{-0.28f, 0.09f, 0.0012f, -0.0008f, -0.012f}, {0.12f, 0.02f, -0.001f, 0.0015f, 0.f}};
+  for (const auto& k : coeffs) {
+    PinholeCamera c = test_camera();
+    c.k1 = k[0], c.k2 = k[1], c.p1 = k[2], c.p2 = k[3], c.k3 = k[4];
+    ASSERT_NO_THROW(c.validate());
+    Pcg32 rng(7);
+    double worst_px = 0.0, worst_inverse = 0.0;
+    for (int i = 0; i < 2000; ++i) {
+      // A pixel anywhere in the image, corners included.
+      float u = rng.next_float() * float(c.width), v = rng.next_float() * float(c.height);
+      Ray r = c.generate_ray(u, v);
+      // The ray's normalized point distorts to the pixel (OpenCV's formula, in double).
+      Vec3f pc = c.world_from_camera.apply_inverse_vector(r.d);
+      double xd, yd;
+      opencv_distort(c.k1, c.k2, c.p1, c.p2, c.k3, pc.x / pc.z, pc.y / pc.z, &xd, &yd);
+      worst_px = std::max(worst_px, std::hypot(c.fx * xd + c.cx - u, c.fy * yd + c.cy - v));
+      // project() inverts generate_ray.
+      float pu, pv;
+      ASSERT_TRUE(c.project(r.o + r.d * 3.f, &pu, &pv));
+      worst_px = std::max(worst_px, double(std::hypot(pu - u, pv - v)));
+      // undistort(distort(p)) == p.
+      Vec2f p((u - c.cx) / c.fx * 0.9f, (v - c.cy) / c.fy * 0.9f), back;
+      ASSERT_TRUE(c.undistort(c.distort(p), &back));
+      worst_inverse = std::max(worst_inverse, double(std::hypot(back.x - p.x, back.y - p.y)));
+    }
+    EXPECT_LT(worst_px, 2e-3) << "pixels";
+    EXPECT_LT(worst_inverse, 1e-5) << "normalized units";
+  }
+}
+
+TEST(camera, distortion_that_folds_the_image_is_refused) {
+  PinholeCamera c = test_camera();
+  c.k1 = -0.9f;  // r (1 - 0.9 r^2) turns back at r = 0.61, inside the image's corners (r_d ~ 0.8)
+  try {
+    c.validate();
+    FAIL() << "accepted a folding distortion";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("folds the image back"), std::string::npos) << e.what();
+  }
+  c.k1 = std::nanf("");
+  EXPECT_THROW(c.validate(), Error);
+}

@@ -7,6 +7,10 @@ A step registers a :class:`PostStep`: its ``name`` (the ``type`` under a scenari
 ``apply(arrays, params) -> arrays``. Steps run in the order the scenario lists them; what
 ran, with its sampled parameters, goes into the frame's metadata. Adding a step is one
 module here (found by :func:`discover`) plus its test.
+
+:mod:`synthgen.post.photo` holds the steps of inserting renders into real photos
+(compositing by differential rendering, camera matching), which the background pipeline
+runs itself.
 """
 from __future__ import annotations
 
@@ -62,7 +66,8 @@ def apply_steps(arrays: Mapping[str, np.ndarray], chain: List[Tuple[str, Mapping
 
 
 def step_modules() -> List[str]:
-    return sorted(m.name for m in pkgutil.iter_modules(__path__))
+    """Modules that define a step (subpackages, like ``photo``, hold helpers of the pipeline)."""
+    return sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.ispkg)
 
 
 def discover() -> None:
