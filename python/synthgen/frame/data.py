@@ -6,7 +6,10 @@ sRGB encoding), ``depth`` float32 camera z in metres (+inf: background), ``insta
 ``class_id`` uint32 (0: background, ground and unlabelled objects), ``normal`` float32 unit
 normals in the OpenCV camera frame, ``albedo`` float32 linear. An array a dataset did not
 write is None. ``objects`` are the frame's labelled, visible objects (as the annotation
-files have them); ``meta`` is the frame's whole metadata.
+files have them); in a frame inserted into a photo, ``real_objects`` are the labelled objects the
+photo shows and ``ignore_regions`` its regions to ignore; ``boxes_xyxy``, ``labels`` and
+``target_masks()`` hold both kinds, inserted first (the order of COCO, YOLO and KITTI);
+``meta`` is the frame's whole metadata.
 """
 from __future__ import annotations
 
@@ -59,13 +62,43 @@ class FrameData:
         return np.asarray(self.instance_id) == int(instance_id)
 
     @property
+    def real_objects(self) -> List[Dict[str, Any]]:
+        """A photo's labelled real objects: class, class_id, bbox [x0, y0, x1, y1], polygon (if
+        known), visible_fraction (what inserted objects leave of it), truncation."""
+        return [o for o in self.meta.get("real_objects", []) if not o["ignore"]]
+
+    @property
+    def ignore_regions(self) -> List[Dict[str, Any]]:
+        """A photo's regions to ignore (crowds, DontCare, real objects mostly hidden), bbox [x0, y0, x1, y1]."""
+        return [o for o in self.meta.get("real_objects", []) if o["ignore"]]
+
+    @property
     def boxes_xyxy(self) -> np.ndarray:
-        """N x 4 float32 boxes [x0, y0, x1, y1] (pixel edges) of :attr:`objects`."""
+        """N x 4 float32 boxes [x0, y0, x1, y1] (pixel edges) of :attr:`objects`, then of
+        :attr:`real_objects`."""
         b = np.array([o["bbox"] for o in self.objects], np.float32).reshape(-1, 4)
         b[:, 2:] += b[:, :2]
-        return b
+        r = np.array([o["bbox"] for o in self.real_objects], np.float32).reshape(-1, 4)
+        return np.concatenate([b, r])
 
     @property
     def labels(self) -> np.ndarray:
-        """N int64 class ids (1-based, COCO category ids) of :attr:`objects`."""
-        return np.array([o["class_id"] for o in self.objects], np.int64)
+        """N int64 class ids (1-based, COCO category ids) of :attr:`objects`, then of :attr:`real_objects`."""
+        return np.array([o["class_id"] for o in self.objects] + [o["class_id"] for o in self.real_objects], np.int64)
+
+    def target_masks(self) -> np.ndarray:
+        """N x H x W bool masks of :attr:`boxes_xyxy`'s objects: inserted ones exact (from
+        ``instance_id``), real ones from their polygon (or box)."""
+        from ..background.labels import polygon_mask
+
+        h, w = (self.rgb if self.rgb is not None else self.instance_id).shape[:2]
+        out = [self.mask(o["instance_id"]) for o in self.objects]
+        for o in self.real_objects:
+            if o.get("polygon"):
+                out.append(polygon_mask(np.asarray(o["polygon"], float), w, h))
+            else:
+                x0, y0, x1, y1 = o["bbox"]
+                m = np.zeros((h, w), bool)
+                m[int(np.floor(y0 + 0.5)):int(np.floor(y1 + 0.5)), int(np.floor(x0 + 0.5)):int(np.floor(x1 + 0.5))] = True
+                out.append(m)
+        return np.stack(out) if out else np.zeros((0, h, w), bool)

@@ -36,6 +36,8 @@ class FrameView:
     ground: Optional[int]          #: the ground instance, if any
     resolution: Tuple[int, int]
     threads: int
+    #: In a photo (background): where objects may stand (frame.photo.PhotoPlacement).
+    photo: Any = None
 
     def labels(self, camera: PinholeCamera) -> Any:
         self.scene.set_camera(camera)
@@ -101,11 +103,28 @@ def _top(o: PlacedObject) -> float:
     return float(_corners(o)[:, 1].max())
 
 
+def _world_corners(o: PlacedObject, x: float, z: float, y: float = 0.0) -> np.ndarray:
+    """The 8 world corners of an object's box standing at (x, y, z) with its yaw (as _put puts it)."""
+    base = (P.translate([x, y, z]) @ P.rotate([0.0, 1.0, 0.0], float(o.spec.yaw))).astype(np.float64)
+    c = _corners(o)
+    return (np.c_[c, np.ones(len(c))] @ base.T)[:, :3]
+
+
 def _on_ground(view: FrameView, camera: PinholeCamera, o: PlacedObject, rng: np.random.Generator,
                region: Sequence[float]) -> Tuple[float, float]:
     """A spot for an object on the ground: uniform in ``region``, or, with ``pixel_height``,
     in a random image column at the camera depth where its box is that many pixels high and
-    wholly inside the image's height (NaN when there is none)."""
+    wholly inside the image's height (NaN when there is none). In a photo: under a pixel of its
+    placement region, the footprint in the region and clear of its real objects."""
+    if view.photo is not None:
+        if o.spec.pixel_height is None:
+            x, z = view.photo.sample(rng)
+        else:
+            x, z = _on_ground(FrameView(view.scene, view.objects, view.decor, view.ground, view.resolution,
+                                        view.threads), camera, o, rng, region)
+        if math.isfinite(x) and not view.photo.accepts(_world_corners(o, x, z)):
+            return float("nan"), float("nan")
+        return x, z
     if o.spec.pixel_height is None:
         x0, z0, x1, z1 = region
         return float(rng.uniform(x0, x1)), float(rng.uniform(z0, z1))
@@ -189,9 +208,12 @@ def _spots(view: FrameView, placement: Mapping[str, Any], rng: np.random.Generat
     return out
 
 
-def _no_spot_reason(o: PlacedObject) -> str:
+def _no_spot_reason(o: PlacedObject, photo: bool = False) -> str:
     if o.spec.support is not None:
         return "no free spot on the top of the objects it rests on (rests_on)"
+    if photo:
+        return ("no free spot in the photo's placement region (within background's min/max_distance, clear of its "
+                "real objects)")
     if o.spec.pixel_height is not None:
         return "no free spot at the distance its pixel_height asks for, inside the image"
     return "no free spot in the placement region"
@@ -262,7 +284,7 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
         fails = []
         for k, spot in enumerate(spots):
             if spot is None:
-                fails.append((k, _no_spot_reason(objects[k])))
+                fails.append((k, _no_spot_reason(objects[k], view.photo is not None)))
             elif counts[k + 1] < max(1 if objects[k].spec.labelled else 0, limits[k]["min_pixels"]):
                 fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {limits[k]['min_pixels']}"))
         if need_amodal and not fails:

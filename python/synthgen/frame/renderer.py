@@ -93,6 +93,19 @@ class FrameRenderer:
         self.default_material: Optional[int] = None
         self.mapped: Set[int] = set()     # instances that have a per-instance material map
         self.objects: List[PlacedObject] = []
+        bg = scenario.spec["background"]
+        self.photos = None
+        if bg is not None:
+            # A photo's ground: a shadow catcher out to the horizon (labels 0, never labelled).
+            from ..background.photoset import PhotoSet
+
+            self.photos = PhotoSet(bg, scenario.base_dir, scenario.seed)
+            pl = P.ground()
+            gm = self.scene.add_mesh(pl["positions"], pl["indices"], normals=pl["normals"], uvs=pl["uvs"], name="ground")
+            self.ground = self.scene.add_instance(gm, np.eye(4), class_id=0, instance_id=0)
+            self.scene.set_instance_catcher(self.ground, True)
+            self.last_photo = None
+            return
         g = scenario.spec["ground"]
         if g["enabled"]:
             pl = P.ground() if g["size"] is None else P.plane(float(g["size"]), float(g["size"]))
@@ -104,8 +117,25 @@ class FrameRenderer:
         t0 = time.perf_counter()
         sc = self.sc
         spec = sample_frame(sc, frame)
-        camera = frame_camera(spec.camera, sc.resolution, frame_rng(sc.seed, frame, 2))
-        self._set_lights(spec.lights)
+        fp = photo_info = None
+        if self.photos is not None:
+            from ..schema import distributions as D
+            from .photo import photo_lights, road_yaw
+
+            bg = sc.spec["background"]
+            prng = frame_rng(sc.seed, frame, 5)
+            zoom = float(D.sample_tree(bg["zoom"], prng, "background.zoom", spec.sampled))
+            fp = self.photos.frame(frame, sc.resolution, prng, zoom)
+            self.last_photo = fp
+            camera = fp.camera()
+            lights, photo_info = photo_lights(fp, [light_plugin(li) for li in spec.lights])
+            self._set_light_plugins(lights)
+            # Objects' yaw is relative to the photo's road (0: along it, away from the camera).
+            for o in spec.objects:
+                o.yaw = float(o.yaw) + road_yaw(fp.setup.road_direction)
+        else:
+            camera = frame_camera(spec.camera, sc.resolution, frame_rng(sc.seed, frame, 2))
+            self._set_lights(spec.lights)
         # This frame's generated textures and materials go into a new library; the previous
         # frame's are removed once this frame's exist (an image both use stays decoded).
         previous, self.library = self.library, FrameLibrary(self.scene)
@@ -116,6 +146,11 @@ class FrameRenderer:
         t_update = time.perf_counter()
 
         view = FrameView(self.scene, objects, self.decor.ids, self.ground, sc.resolution, self.threads)
+        if fp is not None:
+            from .photo import PhotoPlacement
+
+            bg = sc.spec["background"]
+            view.photo = PhotoPlacement(fp, camera, bg["min_distance"], bg["max_distance"], bg["max_real_overlap"])
         layout = search_layout(view, camera, sc.spec["placement"], frame_rng(sc.seed, frame, 1))
         keep = layout.kept()
         t_layout = time.perf_counter()
@@ -138,6 +173,22 @@ class FrameRenderer:
         arrays = {"rgb": np.asarray(res.rgb), "depth": np.asarray(res.depth),
                   "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id),
                   "normal": np.asarray(res.normal), "albedo": np.asarray(res.albedo)}
+        photo_meta = None
+        if fp is not None:
+            from ..outputs.coco import mask_bbox
+            from .photo import finish_photo_frame, real_object_records
+
+            ids = arrays["instance_id"]
+            boxes = [[b[0], b[1], b[0] + b[2], b[1] + b[3]] for k in range(len(objects)) if keep[k]
+                     for b in [mask_bbox(ids == k + 1)] if b is not None]
+            arrays, photo_meta = finish_photo_frame(fp, res, arrays, sc.spec["background"]["composite"], boxes,
+                                                    fp.depth, fp.occluders, camera)
+            hidden = set(np.unique(ids[(ids > 0) & (arrays["instance_id"] == 0)]).tolist())
+            for k in range(len(objects)):
+                if keep[k] and objects[k].spec.labelled and (k + 1) in hidden and not (arrays["instance_id"] == k + 1).any():
+                    keep[k] = False
+                    layout.dropped[k] = "hidden by a real occluder of the photo"
+            photo_meta.update(photo_info or {})
         if spec.post:
             arrays = post.apply_steps(arrays, [(p.type, p.params) for p in spec.post])
         meta = {
@@ -145,7 +196,7 @@ class FrameRenderer:
             "scenario_seed": sc.seed, "render_seed": render_seed, "scenario_sha256": sc.sha256,
             "image_size": list(sc.resolution), "camera": camera_meta(camera), "kitti_frame": level_frame(camera),
             "render": dict(rs), "layout_attempts": layout.attempts,
-            "lights": [dict(zip(("type", "params"), light_plugin(li))) for li in spec.lights],
+            "lights": [{"type": t, "params": p} for t, p in self.light_specs],
             "objects": object_records(objects, keep, layout.dropped, amodal, arrays["instance_id"], camera,
                                       sc.class_names),
             "sampled": spec.sampled, "class_names": list(sc.class_names), "negative": spec.negative,
@@ -153,6 +204,11 @@ class FrameRenderer:
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
         }
+        if fp is not None:
+            # Frames of one photo share its content: one split for all of them.
+            meta["split_keys"].append(f"photo:{fp.photo.sha256}")
+            meta["background"] = {**fp.meta(), **photo_meta}
+            meta["real_objects"] = real_object_records(fp, arrays["instance_id"], sc.class_names)
         if spec.post:
             meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]
         timings = {"update_s": t_update - t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
@@ -160,15 +216,26 @@ class FrameRenderer:
 
     # -- scene set-up of one frame --------------------------------------------------------
     def _set_lights(self, lights: List[PluginSpec]) -> None:
+        self._set_light_plugins([light_plugin(li) for li in lights])
+
+    def _set_light_plugins(self, lights: List[Tuple[str, Dict[str, Any]]]) -> None:
         for lid in self.lights:
             self.scene.remove_light(lid)
-        self.lights = [self.scene.add_light(*light_plugin(li)) for li in lights]
+        self.lights = [self.scene.add_light(t, p) for t, p in lights]
+        self.light_specs = list(lights)
 
     def _set_ground(self, spec: FrameSpec) -> None:
         if self.ground is None:
             return
         if self.ground_material is None:
             self.ground_material = self.scene.add_material("diffuse", {})
+        if self.photos is not None:
+            from .photo import ground_albedo
+
+            albedo = ground_albedo(self.last_photo, self.sc.spec["background"]["ground_albedo"])
+            self.scene.update_material(self.ground_material, "diffuse", {"albedo": albedo})
+            self.scene.set_instance_material(self.ground, self.ground_material)
+            return
         m = spec.ground.material
         self.scene.update_material(self.ground_material, m.type, realize(self.library, m.params))
         self.scene.set_instance_material(self.ground, self.ground_material)

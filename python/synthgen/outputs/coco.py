@@ -180,18 +180,48 @@ def coco_dataset(images: Sequence[Mapping[str, Any]], annotations: Sequence[Mapp
 # Datasets
 
 
+def xyxy_to_xywh(box: Sequence[float]) -> List[float]:
+    x0, y0, x1, y1 = (float(v) for v in box)
+    return [x0, y0, x1 - x0, y1 - y0]
+
+
+def real_annotations(meta: Mapping[str, Any], n_classes: int) -> List[Dict[str, Any]]:
+    """COCO annotations of a photo frame's real objects (``source: real``): its labelled
+    objects, and its ignore regions as ``iscrowd: 1`` (for every category when they have none:
+    COCO's evaluation ignores a crowd region for its own category only)."""
+    anns = []
+    for o in meta.get("real_objects", []):
+        bbox = xyxy_to_xywh(o["bbox"])
+        if o.get("polygon"):
+            seg = [[float(v) for p in o["polygon"] for v in p]]
+            pts = np.asarray(o["polygon"], float)
+            area = float(0.5 * abs(np.dot(pts[:, 0], np.roll(pts[:, 1], 1)) - np.dot(pts[:, 1], np.roll(pts[:, 0], 1))))
+        else:
+            x, y, w, h = bbox
+            seg = [[x, y, x + w, y, x + w, y + h, x, y + h]]
+            area = w * h
+        cats = [int(o["class_id"])] if o["class_id"] else list(range(1, n_classes + 1))
+        for c in cats:
+            anns.append({"id": 1, "image_id": int(meta["frame"]), "category_id": c, "segmentation": seg,
+                         "area": area, "bbox": bbox, "iscrowd": int(bool(o["ignore"])), "source": "real",
+                         "visible_fraction": float(o["visible_fraction"]), "truncation": float(o["truncation"])})
+    return anns
+
+
 def frame_annotations(meta: Mapping[str, Any], instance_id: np.ndarray) -> List[Dict[str, Any]]:
-    """COCO annotations (image_id = frame, ids assigned later) of a frame's visible objects."""
+    """COCO annotations (image_id = frame, ids assigned later) of a frame's visible objects
+    (``source: synthetic``) and, in a photo frame, its real objects and ignore regions
+    (:func:`real_annotations`)."""
     anns = []
     for o in meta["objects"]:
         if o.get("dropped") or not o.get("visible_pixels"):
             continue
         a = coco_annotation(1, int(meta["frame"]), int(o["class_id"]), instance_id == o["instance_id"],
                             extra={"instance_id": o["instance_id"], "occlusion": o["occlusion"],
-                                   "truncation": o["truncation"]})
+                                   "truncation": o["truncation"], "source": "synthetic"})
         if a is not None:
             anns.append(a)
-    return anns
+    return anns + real_annotations(meta, len(meta.get("class_names", [])))
 
 
 def frame_record(frame: Frame) -> Dict[str, Any]:

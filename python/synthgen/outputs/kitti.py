@@ -72,7 +72,19 @@ def write_kitti(path: str, frame: Frame) -> str:
                         occluded=kitti_occlusion_level(o["visible_fraction"]), alpha=o["alpha"],
                         dimensions=o["dimensions_hwl"], location=o["location_camera"],
                         rotation_y=o["rotation_y"]) for o in frame.visible_objects()]
+    # A photo's real objects (their 3D box unknown: KITTI's -1 / -1000 / -10) and its ignore
+    # regions as DontCare.
+    for o in frame.real_objects():
+        lines.append(kitti_line(o["class"], _xywh(o["bbox"]), truncated=o["truncation"],
+                                occluded=kitti_occlusion_level(o["visible_fraction"])))
+    for o in frame.ignore_regions():
+        lines.append(kitti_line("DontCare", _xywh(o["bbox"]), truncated=-1.0, occluded=-1))
     return write_text(path, "".join(line + "\n" for line in lines))
+
+
+def _xywh(box: Sequence[float]) -> List[float]:
+    x0, y0, x1, y1 = (float(v) for v in box)
+    return [x0, y0, x1 - x0, y1 - y0]
 
 
 def calib_text(P2: Sequence[Sequence[float]], level_from_world: Sequence[Sequence[float]]) -> str:

@@ -125,17 +125,16 @@ class Dataset:
             def __getitem__(self, i: int) -> Any:
                 f = owner.frame(frames[i])
                 image = torch.as_tensor(np.ascontiguousarray(f.image.transpose(2, 0, 1)), dtype=torch.float32) / 255.0
-                objs = f.objects
-                masks = np.stack([f.mask(o["instance_id"]) for o in objs]) if objs and f.instance_id is not None \
-                    else np.zeros((len(objs),) + f.image.shape[:2], bool)
                 boxes = f.boxes_xyxy
+                masks = f.target_masks() if f.instance_id is not None \
+                    else np.zeros((len(boxes),) + f.image.shape[:2], bool)
                 target = {"boxes": torch.as_tensor(boxes, dtype=torch.float32),
                           "labels": torch.as_tensor(f.labels, dtype=torch.int64),
                           "masks": torch.as_tensor(masks.astype(np.uint8)),
                           "image_id": int(f.index),
                           "area": torch.as_tensor((boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1]),
                                                   dtype=torch.float32),
-                          "iscrowd": torch.zeros(len(objs), dtype=torch.int64)}
+                          "iscrowd": torch.zeros(len(boxes), dtype=torch.int64)}
                 return transform(image, target) if transform is not None else (image, target)
 
         return _Frames()

@@ -48,6 +48,14 @@ class Frame:
         """Objects that were kept and have visible pixels, in frame order."""
         return [o for o in self.meta["objects"] if not o.get("dropped") and o.get("visible_pixels")]
 
+    def real_objects(self) -> List[Mapping[str, Any]]:
+        """Labelled real objects of a photo frame (``background``), in the photo's order."""
+        return [o for o in self.meta.get("real_objects", []) if not o["ignore"]]
+
+    def ignore_regions(self) -> List[Mapping[str, Any]]:
+        """A photo frame's ignore regions: crowds, DontCare, real objects mostly hidden."""
+        return [o for o in self.meta.get("real_objects", []) if o["ignore"]]
+
 
 @dataclass(frozen=True)
 class OutputKind:

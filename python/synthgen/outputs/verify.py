@@ -85,7 +85,14 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
         h, w = ids.shape
         sem_path = os.path.join(out_dir, "semantic", name + ".png")
         sem = _read_u16(sem_path) if os.path.isfile(sem_path) else None
-        anns = sorted(by_image.get(k, []), key=lambda a: a["instance_id"])
+        all_anns = by_image.get(k, [])
+        anns = sorted((a for a in all_anns if a.get("source") != "real"), key=lambda a: a["instance_id"])
+        real = [a for a in all_anns if a.get("source") == "real" and not a["iscrowd"]]
+        meta_real = [o for o in meta.get("real_objects", []) if not o["ignore"]]
+        if [(a["category_id"], a["bbox"]) for a in real] != \
+                [(o["class_id"], [o["bbox"][0], o["bbox"][1], o["bbox"][2] - o["bbox"][0], o["bbox"][3] - o["bbox"][1]])
+                 for o in meta_real]:
+            fail(f"frame {k}: COCO's real objects differ from the frame's meta")
         present = sorted(int(i) for i in np.unique(ids) if i != 0)
         if [a["instance_id"] for a in anns] != present:
             fail(f"frame {k}: COCO labels instances {[a['instance_id'] for a in anns]}, mask shows {present}")
@@ -93,9 +100,19 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
         kitti_path = os.path.join(out_dir, "kitti", name + ".txt")
         yolo = parse_yolo(open(yolo_path).read(), w, h) if os.path.isfile(yolo_path) else None
         kitti = parse_kitti(open(kitti_path).read()) if os.path.isfile(kitti_path) else None
+        if kitti is not None:
+            kitti = [kt for kt in kitti if kt["type"] != "DontCare"]
         for lst, what in ((yolo, "YOLO"), (kitti, "KITTI")):
-            if lst is not None and len(lst) != len(anns):
-                fail(f"frame {k}: {what} has {len(lst)} objects, COCO {len(anns)}")
+            if lst is not None and len(lst) != len(anns) + len(real):
+                fail(f"frame {k}: {what} has {len(lst)} objects, COCO {len(anns) + len(real)}")
+        for j, a in enumerate(real):  # after the inserted objects, in the same order everywhere
+            jj = len(anns) + j
+            if yolo is not None and (yolo[jj][0] != a["category_id"] - 1 or
+                                     np.max(np.abs(np.subtract(yolo[jj][1], a["bbox"]))) > 1e-3 * max(w, h)):
+                fail(f"frame {k}: YOLO line {jj + 1} differs from COCO's real object {j}")
+            if kitti is not None and np.max(np.abs(np.subtract(kitti[jj]["bbox"], a["bbox"]))) > 0.01:
+                fail(f"frame {k}: KITTI line {jj + 1} differs from COCO's real object {j}")
+            n_ann += 1
         for j, a in enumerate(anns):
             m = ids == a["instance_id"]
             if not np.array_equal(rle_decode(a["segmentation"]), m):

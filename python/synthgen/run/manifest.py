@@ -102,6 +102,14 @@ def build_manifest(sc: Scenario) -> Dict[str, Any]:
     for p in sorted(paths):
         for f in [p] + _companions(p):
             files[f] = _sha256(f)
+    if sc.spec.get("background") is not None:
+        # The photos the globs and folders expand to, their calibrations and label files: adding
+        # one photo to a folder changes which photo every later frame uses.
+        from ..background.photoset import PhotoSet
+
+        ps = PhotoSet(sc.spec["background"], sc.base_dir, sc.seed)
+        for f, h in ps.input_files(with_labels=True).items():
+            files[f] = h
     inputs = {"files": {os.path.basename(f) + " (" + f + ")": h for f, h in files.items()}}
     if assets:
         from ..scene import assets as A

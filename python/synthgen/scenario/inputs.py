@@ -165,6 +165,19 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
     if ground["enabled"]:
         c.plugin("material", ground["material"], ground.locs.get("material", ground.loc))
     c.objects(spec["objects"])
+    if spec.get("background") is not None:
+        from ..background.photoset import PhotoSet
+
+        bg = spec["background"]
+        loc = spec.locs.get("background", spec.loc)
+        try:
+            ps = PhotoSet(bg, sc.base_dir, sc.seed)
+            ps.check_count(int(spec["count"]))
+            c.seen.update({("photo", p): None for p in ps.paths[:ps.check(list(sc.class_names))]})
+        except SceneFileError:
+            raise
+        except (SynthgenError, OSError) as e:
+            c.fail(loc, "cannot use this photo", e)
     if c.fonts:
         c.check_fonts(spec.locs.get("objects", spec.loc))
     kinds: Dict[str, int] = {}

@@ -21,7 +21,7 @@ from ..schema.plugins import plugin_record, settings_record
 from ..scene.assets import AXES
 from ..schema.random import R, randomized
 
-__all__ = ["SCENARIO_SCHEMA", "MATERIAL", "LIGHT", "CAMERA", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS",
+__all__ = ["SCENARIO_SCHEMA", "BACKGROUND", "MATERIAL", "LIGHT", "CAMERA", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS",
            "SHAPE_KEYS", "POST_STEP"]
 
 #: A material: any material plugin but those made of other materials (``mix``).
@@ -106,6 +106,32 @@ PLACEMENT = Record(
      "max_retries": Integer(20, min=0, max=10000, doc="layouts tried before objects are dropped")},
     default=EMPTY, doc="placement on the ground plane (y = 0)")
 
+#: Real photos as backgrounds (synthgen.background; docs/augmented_photos.md).
+BACKGROUND = Record(
+    {"photos": ListOf(String(), REQUIRED, min_items=1,
+                      doc="photo files, globs (`photos/*.jpg`) or folders, relative to the scenario; each photo has "
+                          "a calibration: PHOTO.yaml beside it, a calibration.yaml for its folder, or `calibration`"),
+     "calibration": FilePath(None, doc="a calibration file for every photo (sidecars override its keys)"),
+     "unlabelled_ok": Bool(False, doc="accept photos that declare no real labels (labels or objects in their "
+                                      "calibration): a car in the photo left unlabelled teaches a detector that cars "
+                                      "are background"),
+     "composite": Choice(["ratio", "additive"], "ratio",
+                         doc="ratio: photo x (render with objects / without) where the ground catches shadows "
+                             "(Cycles' shadow catcher; the ground's albedo cancels); additive: photo + (with - "
+                             "without) (Debevec 1998)"),
+     "zoom": R(Number(1.0, min=1.0, max=8.0, doc="the photo scaled to cover the image, then by this much more; "
+                                                 "the frame is a random crop of it")),
+     "max_uses": Integer(None, min=1, doc="frames per photo at most (photos are used in turn, each once per round)"),
+     "min_distance": Number(3.0, min=0.0, doc="objects stand at least this far from the camera, metres"),
+     "max_distance": Number(40.0, min=0.0, min_open=True, doc="and at most this far"),
+     "max_real_overlap": Number(0.5, min=0.0, max=1.0,
+                                doc="an inserted object and a real object (or an ignore region) may overlap by at most "
+                                    "this fraction of the farther one's box (the one hidden)"),
+     "ground_albedo": Vector(3, None, min=0.0, max=1.0, broadcast=True,
+                             doc="albedo of the ground that catches shadows (default: 0.15 with the photo's ground "
+                                 "colour; ratio compositing cancels it to first order)")},
+    default=None, doc="insert the objects into real photos: the photo's camera, ground, sun and real labels")
+
 #: The render settings a scenario sets (the seed of each frame derives from the scenario's).
 RENDER_KEYS = ("spp", "max_depth", "rr_depth", "threads")
 RENDER = settings_record("render", "path_tracer", keys=RENDER_KEYS, default=EMPTY,
@@ -150,5 +176,6 @@ SCENARIO_SCHEMA = Record(
      "negative_frames": Number(0.0, min=0.0, max=1.0,
                                doc="fraction of frames without labelled objects (negatives for detectors; unlabelled "
                                    "entries stay)"),
-     "post": ListOf(POST_STEP, [], doc="image-space steps applied to each frame's image, in order")},
+     "post": ListOf(POST_STEP, [], doc="image-space steps applied to each frame's image, in order"),
+     "background": BACKGROUND},
     doc="a scenario")

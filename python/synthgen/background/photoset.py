@@ -1,0 +1,242 @@
+"""The photos of a scenario's ``background``: the files, each photo's calibration (read once per
+worker), which photo a frame uses, and the frame's crop of it.
+
+Photos are used in turn: frame f uses photo ``order[f mod N]`` of a permutation drawn per round
+(``f div N``) from the scenario's seed, so every photo is used once per round, any frame's photo
+is known without the others, and ``max_uses`` caps the rounds.
+"""
+from __future__ import annotations
+
+import math
+import os
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any, Dict, List, Mapping, Optional, Tuple
+
+import numpy as np
+
+from .._core import SynthgenError
+from .labels import RealObject
+from .photos import Photo, expand_photos, file_sha256, load_photo
+from .sidecar import PhotoSetup, find_calibration_files, read_photo_setup
+
+__all__ = ["PhotoSet", "FramePhoto", "resize_linear", "read_depth", "nearest_crop"]
+
+#: A depth map file larger than this is refused before it is read.
+MAX_DEPTH_BYTES = 1 << 30
+
+
+def read_depth(setup: PhotoSetup, width: int, height: int) -> np.ndarray:
+    """The photo's metric depth (H x W float32, +inf where unknown) from its calibration's
+    ``depth``: an image (EXR, PFM, PNG) or a numpy .npy / .npz file, of depth x scale or of
+    disparity (depth = baseline x focal / (disparity + doffs): Middlebury's convention)."""
+    d = setup.depth
+    path = d["file"]
+    if os.path.getsize(path) > MAX_DEPTH_BYTES:
+        raise SynthgenError(f"{path}: a depth map larger than {MAX_DEPTH_BYTES} bytes")
+    if path.lower().endswith((".npy", ".npz")):
+        try:
+            a = np.load(path, allow_pickle=False)
+            if isinstance(a, np.lib.npyio.NpzFile):
+                with a:
+                    if not a.files:
+                        raise SynthgenError(f"{path}: the .npz file holds no array")
+                    a = a[a.files[0]]
+        except (OSError, ValueError) as e:
+            raise SynthgenError(f"{path}: cannot read the depth map ({e})") from None
+        a = np.asarray(a)
+        if a.dtype.kind not in "fiu":
+            raise SynthgenError(f"{path}: the depth map holds {a.dtype} values, not numbers")
+        a = a.astype(np.float32)
+    else:
+        from .._core import read_image
+
+        a = read_image(path, "linear", finite=False)
+    if a.ndim == 3:
+        a = a[:, :, 0]
+    if a.shape != (height, width):
+        raise SynthgenError(f"{path}: the depth map is {a.shape[1] if a.ndim == 2 else '?'} x {a.shape[0]}, the "
+                            f"photo {width} x {height}")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if d["kind"] == "disparity":
+            focal = d.get("focal") or setup.calibration.fx
+            z = float(d["baseline"]) * float(focal) / (a + float(d["doffs"]))
+        else:
+            z = a * float(d["scale"])
+    return np.where(np.isfinite(z) & (z > 0), z, np.inf).astype(np.float32)
+
+
+def nearest_crop(a: np.ndarray, sw: int, sh: int, crop: Tuple[int, int, int, int]) -> np.ndarray:
+    """A per-pixel map (H x W) of the photo resized to sw x sh by nearest neighbour (depths and
+    masks are not blended across edges), then cropped."""
+    h, w = a.shape[:2]
+    x0, y0, cw, ch = crop
+    xs = np.minimum(((np.arange(x0, x0 + cw) + 0.5) * w / sw).astype(np.int64), w - 1)
+    ys = np.minimum(((np.arange(y0, y0 + ch) + 0.5) * h / sh).astype(np.int64), h - 1)
+    return a[ys][:, xs]
+
+
+def resize_linear(pixels: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Resamples linear pixels to width x height (OpenImageIO's resize: a Lanczos-3 filter on
+    reduction, so a downscaled photo keeps its noise statistics honest, not aliased)."""
+    import OpenImageIO as oiio
+
+    h, w, c = pixels.shape
+    if (w, h) == (width, height):
+        return pixels
+    src = oiio.ImageBuf(oiio.ImageSpec(w, h, c, oiio.FLOAT))
+    src.set_pixels(oiio.ROI(), np.ascontiguousarray(pixels, np.float32))
+    dst = oiio.ImageBufAlgo.resize(src, filtername="lanczos3", roi=oiio.ROI(0, width, 0, height, 0, 1, 0, c))
+    return np.maximum(np.asarray(dst.get_pixels(oiio.FLOAT), np.float32).reshape(height, width, c), 0.0)
+
+
+@dataclass
+class FramePhoto:
+    """The photo of one frame: the crop of the (scaled) photo the image shows, its camera
+    geometry, and the real objects in crop pixels."""
+
+    index: int
+    photo: Photo
+    setup: PhotoSetup
+    scale: float                       #: photo pixels -> scaled pixels
+    crop: Tuple[int, int, int, int]    #: x0, y0, width, height in scaled pixels
+    pixels: np.ndarray                 #: the crop, H x W x 3 linear
+    calibration: Any                   #: Calibration of the scaled photo
+    objects: List[RealObject]          #: real objects, boxes in crop pixels (clipped; polygons shifted)
+    regions: List[np.ndarray]          #: placement polygons in crop pixels
+    depth: Optional[np.ndarray] = None      #: the photo's metric depth in the crop (+inf: unknown)
+    occluders: Optional[np.ndarray] = None  #: real things in front of everything inserted (crop)
+
+    def camera(self):
+        return self.calibration.camera(self.crop)
+
+    def meta(self) -> Dict[str, Any]:
+        return {"path": self.photo.path, "sha256": self.photo.sha256, "size": [self.photo.width, self.photo.height],
+                "scale": self.scale, "crop": list(self.crop), "format": self.photo.format,
+                "jpeg_quality": self.photo.jpeg_quality, **self.setup.meta()}
+
+
+class PhotoSet:
+    """The photos of a validated ``background`` section (see the module docstring)."""
+
+    def __init__(self, background: Mapping[str, Any], base_dir: str, seed: int, cache: int = 4):
+        self.bg = background
+        self.paths = expand_photos(list(background["photos"]), base_dir)
+        self.shared = background.get("calibration")
+        self.seed = int(seed)
+        self._photos: "OrderedDict[str, Photo]" = OrderedDict()
+        self._setups: Dict[str, PhotoSetup] = {}
+        self._depths: Dict[str, np.ndarray] = {}
+        self._cache = cache
+
+    def __len__(self) -> int:
+        return len(self.paths)
+
+    def check_count(self, count: int) -> None:
+        cap = self.bg.get("max_uses")
+        if cap is not None and count > cap * len(self.paths):
+            raise SynthgenError(f"background: {count} frames need more than max_uses {cap} x {len(self.paths)} photos")
+
+    def index_for_frame(self, frame: int) -> int:
+        n = len(self.paths)
+        rnd, k = divmod(int(frame), n)
+        cap = self.bg.get("max_uses")
+        if cap is not None and rnd >= cap:
+            raise SynthgenError(f"background: frame {frame} would use a photo more than max_uses {cap} times")
+        order = np.random.default_rng(np.random.SeedSequence([self.seed, 0x70686f74, rnd])).permutation(n)
+        return int(order[k])
+
+    def photo(self, i: int) -> Photo:
+        path = self.paths[i]
+        if path in self._photos:
+            self._photos.move_to_end(path)
+            return self._photos[path]
+        p = load_photo(path)
+        self._photos[path] = p
+        while len(self._photos) > self._cache:
+            self._photos.popitem(last=False)
+        return p
+
+    def setup(self, i: int, photo: Optional[Photo] = None) -> PhotoSetup:
+        path = self.paths[i]
+        if path not in self._setups:
+            p = photo or self.photo(i)
+            self._setups[path] = read_photo_setup(path, p.width, p.height, shared=self.shared,
+                                                  exif_focal_mm=p.exif_focal_mm, exif_focal_35mm=p.exif_focal_35mm)
+        return self._setups[path]
+
+    def input_files(self, with_labels: bool = False) -> Dict[str, str]:
+        """Every file the photos bring: path -> sha256 of the photos and their calibration files,
+        and with ``with_labels`` the label, depth, mask and environment files those name
+        (reading each calibration)."""
+        out = {}
+        for i, path in enumerate(self.paths):
+            out[path] = file_sha256(path)
+            for f in find_calibration_files(path, self.shared):
+                out[f] = file_sha256(f)
+            if with_labels:
+                s = self.setup(i)
+                extra = list(s.files) + [p for p in (s.depth and s.depth["file"], s.occluders,
+                                                     s.envmap and s.envmap[0]) if p]
+                for f in extra:
+                    out[f] = file_sha256(f)
+        return out
+
+    def check(self, class_names: List[str]) -> int:
+        """Reads every photo and its calibration once (validation); refuses a photo without real
+        labels unless unlabelled_ok. Returns the number of photos."""
+        for i, path in enumerate(self.paths):
+            p = self.photo(i)
+            s = self.setup(i, p)
+            if not s.labelled and not self.bg["unlabelled_ok"]:
+                raise SynthgenError(
+                    f"{path}: the photo declares no real labels (labels or objects in its calibration): real "
+                    f"{'/'.join(class_names)} it shows would be learnt as background. Label them (or write "
+                    "'objects: []' when there are none), or set background.unlabelled_ok: true")
+        return len(self.paths)
+
+    def frame(self, frame: int, resolution: Tuple[int, int], rng: np.random.Generator, zoom: float) -> FramePhoto:
+        i = self.index_for_frame(frame)
+        photo = self.photo(i)
+        setup = self.setup(i, photo)
+        w, h = resolution
+        # The smallest scale that covers the image, then zoom; a random crop of the result.
+        scale = max(w / photo.width, h / photo.height) * float(zoom)
+        sw, sh = max(w, int(round(photo.width * scale))), max(h, int(round(photo.height * scale)))
+        x0 = int(rng.integers(0, sw - w + 1))
+        y0 = int(rng.integers(0, sh - h + 1))
+        scaled = resize_linear(photo.pixels, sw, sh) if (sw, sh) != (photo.width, photo.height) else photo.pixels
+        sx, sy = sw / photo.width, sh / photo.height
+        cal = setup.calibration.scaled(sx) if abs(sx - sy) < 1e-9 else _scaled_xy(setup.calibration, sx, sy)
+        objects = []
+        for o in setup.objects:
+            bx = np.array(o.box, np.float64) * [sx, sy, sx, sy] - [x0, y0, x0, y0]
+            clipped = [max(bx[0], 0.0), max(bx[1], 0.0), min(bx[2], w), min(bx[3], h)]
+            if clipped[2] <= clipped[0] or clipped[3] <= clipped[1]:
+                continue  # outside the crop
+            poly = None if o.polygon is None else np.asarray(o.polygon) * [sx, sy] - [x0, y0]
+            objects.append(RealObject(o.cls, clipped, poly, o.ignore, o.source))
+            objects[-1].full_box = [float(v) for v in bx]  # type: ignore[attr-defined]
+        regions = [np.asarray(p) * [sx, sy] - [x0, y0] for p in setup.regions]
+        fp = FramePhoto(i, photo, setup, scale, (x0, y0, w, h),
+                        np.ascontiguousarray(scaled[y0:y0 + h, x0:x0 + w], np.float32), cal, objects, regions)
+        if setup.depth is not None:
+            if photo.path not in self._depths:
+                self._depths = {photo.path: read_depth(setup, photo.width, photo.height)}
+            fp.depth = nearest_crop(self._depths[photo.path], sw, sh, fp.crop)
+        if setup.occluders is not None:
+            from .._core import read_image
+
+            m = read_image(setup.occluders, "linear")
+            if m.shape[:2] != (photo.height, photo.width):
+                raise SynthgenError(f"{setup.occluders}: the occluder mask is {m.shape[1]} x {m.shape[0]}, the photo "
+                                    f"{photo.width} x {photo.height}")
+            fp.occluders = nearest_crop(m[:, :, 0] > 0.5, sw, sh, fp.crop)
+        return fp
+
+
+def _scaled_xy(cal, sx: float, sy: float):
+    from dataclasses import replace
+
+    return replace(cal, width=int(round(cal.width * sx)), height=int(round(cal.height * sy)), fx=cal.fx * sx,
+                   fy=cal.fy * sy, cx=(cal.cx + 0.5) * sx - 0.5, cy=(cal.cy + 0.5) * sy - 0.5)

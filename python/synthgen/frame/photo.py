@@ -1,0 +1,325 @@
+"""A frame inserted into a real photo (the scenario's ``background``): the photo's camera and
+ground, placement on its ground inside its region and clear of its real objects, its light,
+the composite by differential rendering, real occluders, and the labels of real and inserted
+objects together.
+
+The world is the photo's (synthgen.background.calibration): y up, the ground y = 0, the camera
+above the origin looking along +z. The ground is a shadow catcher (``Scene.set_instance_catcher``):
+rendered with and without the inserted objects, never labelled.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
+
+import numpy as np
+
+from ..background.labels import RealObject, polygon_mask
+from ..background.photoset import FramePhoto, PhotoSet
+from ..post.photo.composite import composite
+from ..scene import primitives as P
+
+__all__ = ["PhotoPlacement", "photo_lights", "ground_albedo", "exposure_factor", "finish_photo_frame",
+           "road_yaw", "MIN_REAL_VISIBLE"]
+
+#: Real objects an inserted one covers more than this fraction of (by pixels) keep their label,
+#: with its visible fraction; below this visible fraction they become ignore regions.
+MIN_REAL_VISIBLE = 0.1
+
+
+def road_yaw(road_direction: float) -> float:
+    """The ``yaw`` (about +y, degrees) that turns an object's forward (+x) along the road, which
+    runs ``road_direction`` degrees to the right of the camera's forward (+z)."""
+    return -90.0 - float(road_direction)
+
+
+def _inside(polys: Sequence[np.ndarray], pts: np.ndarray) -> np.ndarray:
+    """Whether each point lies inside one of the polygons (even-odd rule)."""
+    out = np.zeros(len(pts), bool)
+    for p in polys:
+        q = np.roll(p, -1, axis=0)
+        inside = np.zeros(len(pts), bool)
+        for (ax, ay), (bx, by) in zip(p, q):
+            if ay == by:
+                continue
+            cond = (ay > pts[:, 1]) != (by > pts[:, 1])
+            xc = ax + (pts[:, 1] - ay) * (bx - ax) / (by - ay)
+            inside ^= cond & (pts[:, 0] < xc)
+        out |= inside
+    return out
+
+
+@dataclass
+class PhotoPlacement:
+    """Where objects may stand in a photo: spots drawn in its placement region (pixels; by
+    default the image below the horizon), at min..max distance, whose footprint lies in the
+    region, and which hides little of a real object or an ignore region behind it, and is
+    hidden little by one in front of it (at most ``max_overlap`` of the farther box)."""
+
+    fp: FramePhoto
+    camera: Any
+    min_distance: float
+    max_distance: float
+    max_overlap: float
+    real_boxes: List[Tuple[float, float, float, float]] = field(default_factory=list)
+
+    def __post_init__(self):
+        self.real_boxes = [tuple(o.box) for o in self.fp.objects]
+        w, h = self.camera.width, self.camera.height
+        if self.fp.regions:
+            self.polys = self.fp.regions
+        else:
+            (u0, v0), (u1, v1) = self.fp.calibration.horizon()
+            (u0, v0), (u1, v1) = (u0 - self.fp.crop[0], v0 - self.fp.crop[1]), (u1 - self.fp.crop[0], v1 - self.fp.crop[1])
+            # Below the horizon (2 % of the height below it: the far ground is ill-conditioned).
+            m = 0.02 * h
+            vl = v0 + (v1 - v0) * (0 - u0) / (u1 - u0) + m
+            vr = v0 + (v1 - v0) * (w - u0) / (u1 - u0) + m
+            self.polys = [np.array([[0.0, vl], [w, vr], [w, h], [0.0, h]])]
+        allp = np.concatenate(self.polys)
+        self.bounds = (max(allp[:, 0].min(), 0.0), max(allp[:, 1].min(), 0.0), min(allp[:, 0].max(), w),
+                       min(allp[:, 1].max(), h))
+
+    def _ground(self, u: float, v: float) -> Optional[np.ndarray]:
+        o, d = self.camera.generate_ray(float(u), float(v))
+        o, d = np.asarray(o, np.float64), np.asarray(d, np.float64)
+        if d[1] >= -1e-9:
+            return None
+        return o + (-o[1] / d[1]) * d
+
+    def sample(self, rng: np.random.Generator) -> Tuple[float, float]:
+        """A ground spot (x, z) under a pixel drawn uniformly in the region, within the distance
+        range; NaN when 50 draws found none."""
+        x0, y0, x1, y1 = self.bounds
+        if not (x1 > x0 and y1 > y0):
+            return float("nan"), float("nan")
+        cam = np.asarray(self.camera.world_from_camera, np.float64)[:3, 3]
+        for _ in range(50):
+            uv = np.array([[rng.uniform(x0, x1), rng.uniform(y0, y1)]])
+            if not _inside(self.polys, uv)[0]:
+                continue
+            g = self._ground(*uv[0])
+            if g is None:
+                continue
+            dist = math.hypot(g[0] - cam[0], g[2] - cam[2])
+            if self.min_distance <= dist <= self.max_distance:
+                return float(g[0]), float(g[2])
+        return float("nan"), float("nan")
+
+    def projected_box(self, corners: np.ndarray) -> Optional[Tuple[float, float, float, float]]:
+        uv = [self.camera.project([float(c) for c in p]) for p in corners]
+        if any(p is None for p in uv):
+            return None
+        uv = np.array(uv)
+        return float(uv[:, 0].min()), float(uv[:, 1].min()), float(uv[:, 0].max()), float(uv[:, 1].max())
+
+    def accepts(self, corners_world: np.ndarray) -> bool:
+        """An object whose box has these 8 world corners: its footprint (the 4 lowest corners) in
+        the region, its image box over no real box by more than max_overlap of that box."""
+        low = corners_world[np.argsort(corners_world[:, 1])[:4]]
+        uv = [self.camera.project([float(c) for c in p]) for p in low]
+        if any(p is None for p in uv):
+            return False
+        uv = np.array(uv)
+        # The region covers the image only: corners outside the image (a truncated object) pass.
+        w, h = self.camera.width, self.camera.height
+        seen = (uv[:, 0] >= 0) & (uv[:, 0] <= w) & (uv[:, 1] >= 0) & (uv[:, 1] <= h)
+        if not np.all(_inside(self.polys, uv[seen])):
+            return False
+        box = self.projected_box(corners_world)
+        if box is None:
+            return False
+        own = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
+        for rb in self.real_boxes:
+            ix = max(0.0, min(box[2], rb[2]) - max(box[0], rb[0]))
+            iy = max(0.0, min(box[3], rb[3]) - max(box[1], rb[1]))
+            area = (rb[2] - rb[0]) * (rb[3] - rb[1])
+            # Whichever is farther (its box's bottom higher in the image: both stand on the
+            # ground) is hidden by the other: at most max_overlap of it.
+            hidden = area if rb[3] < box[3] else own
+            if hidden > 0 and ix * iy / hidden > self.max_overlap:
+                return False
+        return True
+
+
+def photo_lights(fp: FramePhoto, scenario_lights: List[Tuple[str, Dict[str, Any]]]
+                 ) -> Tuple[List[Tuple[str, Dict[str, Any]]], Dict[str, Any]]:
+    """The lights of a photo frame and how they were chosen: the photo's HDR environment
+    (rotated as given), else a clear sky whose sun stands where the photo's does, else an
+    overcast sky when the photo says so, else the scenario's lights (a fallback: flagged, since
+    its sun contradicts the shadows the photo shows)."""
+    s = fp.setup
+    if s.envmap is not None:
+        path, rot = s.envmap
+        return [("envmap", {"file": path, "rotation": rot})], {"lighting": "the photo's environment map"}
+    if s.sun is not None:
+        az, el = s.sun
+        return [("sky", {"elevation": max(0.0, min(90.0, el)), "azimuth": az, "strength": 0.02})], \
+            {"lighting": f"sky with the photo's sun ({s.sun_source})"}
+    if s.overcast:
+        return [("environment", {"radiance": 1.0})], {"lighting": "overcast (uniform sky), as the photo says"}
+    return scenario_lights, {"lighting": "the scenario's lights (fallback: the photo gives no sun; shadows may "
+                                         "contradict the photo's)", "lighting_fallback": True}
+
+
+def ground_albedo(fp: FramePhoto, given: Optional[Sequence[float]]) -> List[float]:
+    """The catcher's albedo: given, or an asphalt-like 0.15 tinted by the median colour of the
+    photo's ground (the region, or the lower third)."""
+    if given is not None:
+        return [float(v) for v in given]
+    h, w = fp.pixels.shape[:2]
+    if fp.regions:
+        mask = np.zeros((h, w), bool)
+        for p in fp.regions:
+            mask |= polygon_mask(p, w, h)
+    else:
+        mask = np.zeros((h, w), bool)
+        mask[2 * h // 3:] = True
+    px = fp.pixels[mask] if mask.any() else fp.pixels.reshape(-1, 3)
+    med = np.median(px, axis=0)
+    tint = med / max(float(med.mean()), 1e-6)
+    return [float(v) for v in np.clip(0.15 * tint, 0.02, 0.6)]
+
+
+def _lum(rgb: np.ndarray) -> np.ndarray:
+    return rgb @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+
+
+def exposure_factor(photo: np.ndarray, without: np.ndarray, synthetic_alpha: np.ndarray, ground: np.ndarray,
+                    boxes: Sequence[Sequence[float]], exclude: np.ndarray) -> Tuple[float, str]:
+    """The factor that makes the rendered ground match the photo's: the median over ground
+    pixels in a ring around each object's box (twice its size; none of the object, not a real
+    object) of photo luminance / rendered luminance without the objects; over all the ground
+    when the rings hold fewer than 50 pixels. NOTE: radiance is linear in the lights, so scaling
+    the render afterwards is the same as scaling the lights."""
+    h, w = ground.shape
+    ring = np.zeros((h, w), bool)
+    for x0, y0, x1, y1 in boxes:
+        cx, cy, bw, bh = 0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0
+        a0, a1 = int(max(0, math.floor(cx - bw))), int(min(w, math.ceil(cx + bw)))
+        b0, b1 = int(max(0, math.floor(cy - bh))), int(min(h, math.ceil(cy + bh)))
+        ring[b0:b1, a0:a1] = True
+    usable = ground & (synthetic_alpha == 0) & ~exclude
+    lw = _lum(without)
+    lp = _lum(photo)
+    sel = ring & usable & (lw > 1e-6)
+    where = "ring around the objects"
+    if sel.sum() < 50:
+        sel = usable & (lw > 1e-6)
+        where = "the whole ground"
+    if sel.sum() < 10:
+        return 1.0, "no ground visible: 1"
+    return float(np.median(lp[sel] / lw[sel])), where
+
+
+def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
+    """H x W camera-space depth of the photo's real objects (and ignore regions) as the
+    calibration places them: each stands on the ground at its box's bottom edge, upright, so
+    its depth is that of the ground point below its bottom centre (a billboard over its
+    polygon, or its box); +inf elsewhere. Where a real object is nearer than an inserted one,
+    it hides it."""
+    h, w = camera.height, camera.width
+    out = np.full((h, w), np.inf, np.float32)
+    wfc = np.asarray(camera.world_from_camera, np.float64)
+    cfw = np.linalg.inv(wfc)
+    for o in fp.objects:
+        x0, y0, x1, y1 = o.box
+        full = getattr(o, "full_box", list(o.box))
+        if full[3] > h + 0.5:
+            continue  # its bottom is cut by the image: where it stands is unknown
+        org, d = camera.generate_ray(0.5 * (x0 + x1), float(min(y1, h - 1e-3)))
+        org, d = np.asarray(org, np.float64), np.asarray(d, np.float64)
+        if d[1] >= -1e-9:
+            continue
+        g = org + (-org[1] / d[1]) * d
+        z = float((cfw @ np.r_[g, 1.0])[2])
+        if o.polygon is not None:
+            mask = polygon_mask(o.polygon, w, h)
+        else:
+            mask = np.zeros((h, w), bool)
+            mask[int(math.floor(y0 + 0.5)):int(math.floor(y1 + 0.5)), int(math.floor(x0 + 0.5)):int(math.floor(x1 + 0.5))] = True
+        out = np.where(mask, np.minimum(out, z), out)
+    return out
+
+
+def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], mode: str,
+                       boxes: Sequence[Sequence[float]], real_depth: Optional[np.ndarray],
+                       occluder_mask: Optional[np.ndarray], camera: Any = None
+                       ) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
+    """The composite and the labels of a photo frame (arrays from the render, ``boxes`` the
+    inserted objects' boxes as x0, y0, x1, y1); returns (arrays, meta)."""
+    ids = np.asarray(arrays["instance_id"])
+    depth = np.asarray(arrays["depth"], np.float32)
+    ground = (ids == 0) & np.isfinite(depth)
+    exclude = np.zeros(ids.shape, bool)
+    h, w = ids.shape
+    for o in fp.objects:
+        x0, y0, x1, y1 = (int(round(v)) for v in o.box)
+        exclude[max(y0, 0):min(y1, h), max(x0, 0):min(x1, w)] = True
+    k, where = exposure_factor(fp.pixels, np.asarray(res.catcher_without) + np.asarray(res.behind_synthetic),
+                               np.asarray(res.synthetic_alpha), ground, boxes, exclude)
+    rgb = composite(fp.pixels, res, mode, exposure=k)
+    # Real things in front of the inserted objects: the photo's nearer depth, or the occluder mask.
+    synthetic = ids > 0
+    front = np.zeros(ids.shape, bool)
+    if real_depth is not None:
+        front |= np.isfinite(real_depth) & (real_depth < depth)
+    labelled_depth = real_object_depth(fp, camera) if camera is not None and fp.objects else None
+    if labelled_depth is not None:
+        front |= np.isfinite(labelled_depth) & (labelled_depth < depth)
+    if occluder_mask is not None:
+        front |= occluder_mask
+    if front.any():
+        rgb = np.where(front[..., None], fp.pixels, rgb)
+    out = dict(arrays)
+    out["rgb"] = rgb.astype(np.float32)
+    out["instance_id"] = np.where(front, 0, ids).astype(ids.dtype)
+    out["class_id"] = np.where(front, 0, np.asarray(arrays["class_id"])).astype(ids.dtype)
+    visible = synthetic & ~front
+    # Depth, normals and albedo are those of the inserted objects (and the photo's depth map);
+    # the calibrated ground is a model, not a measurement of the photo.
+    base_depth = real_depth if real_depth is not None else np.full(ids.shape, np.inf, np.float32)
+    out["depth"] = np.where(visible, depth, base_depth).astype(np.float32)
+    for key in ("normal", "albedo"):
+        if key in out:
+            out[key] = np.where(visible[..., None], out[key], 0.0).astype(np.float32)
+    meta = {"exposure": {"factor": k, "from": where}, "composite": mode,
+            "real_occlusion": {"pixels": int((synthetic & front).sum()),
+                               "by": [s for s, m in (("depth", real_depth), ("mask", occluder_mask),
+                                                     ("real labels", labelled_depth)) if m is not None]}}
+    return out, meta
+
+
+def real_object_records(fp: FramePhoto, instance_id: np.ndarray, class_names: Sequence[str]) -> List[Dict[str, Any]]:
+    """The real objects of a frame for the outputs: class (the scenario's), box in the image,
+    polygon, ignore, and the fraction an inserted object leaves visible (a real object mostly
+    hidden becomes an ignore region)."""
+    h, w = instance_id.shape
+    covered = instance_id > 0
+    out = []
+    for i, o in enumerate(fp.objects):
+        if not o.ignore and o.cls not in class_names:
+            continue
+        if o.polygon is not None:
+            mask = polygon_mask(o.polygon, w, h)
+        else:
+            mask = np.zeros((h, w), bool)
+            x0, y0, x1, y1 = o.box
+            mask[int(math.floor(y0 + 0.5)):int(math.floor(y1 + 0.5)), int(math.floor(x0 + 0.5)):int(math.floor(x1 + 0.5))] = True
+        area = int(mask.sum())
+        vis = float((mask & ~covered).sum() / area) if area else 0.0
+        full = getattr(o, "full_box", list(o.box))
+        full_area = max((full[2] - full[0]) * (full[3] - full[1]), 1e-9)
+        inside_area = (o.box[2] - o.box[0]) * (o.box[3] - o.box[1])
+        rec = {"index": i, "source": "real", "class": None if o.ignore else o.cls,
+               "class_id": 0 if o.ignore else class_names.index(o.cls) + 1,
+               "ignore": bool(o.ignore or vis < MIN_REAL_VISIBLE),
+               "bbox": [float(v) for v in o.box], "visible_fraction": vis,
+               "truncation": float(max(0.0, 1.0 - inside_area / full_area)), "from": o.source}
+        if o.polygon is not None:
+            rec["polygon"] = np.asarray(o.polygon, float).round(2).tolist()
+        if o.ignore:
+            rec["what"] = o.cls
+        out.append(rec)
+    return out
