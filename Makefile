@@ -18,6 +18,8 @@ demo: install
 	$(VENV)/bin/synthgen demo -o out/demo
 	$(VENV)/bin/synthgen run scenarios/default.yaml -o out/dataset -n 4 --resume --no-progress
 	$(VENV)/bin/synthgen verify out/dataset
+	$(VENV)/bin/synthgen run scenarios/augmented_road.yaml -o out/augmented -n 4 --resume --no-progress
+	$(VENV)/bin/synthgen verify out/augmented
 
 test: install
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -27,6 +27,7 @@ from typing import Callable, Dict, List
 
 import synthgen
 from synthgen import cli, outputs, post, randomize
+from synthgen.background.sidecar import CALIBRATION_SCHEMA
 from synthgen.scenario import SCENARIO_SCHEMA
 from synthgen.schema.plugins import plugin_info, plugin_names
 from synthgen.schema.reference import format_scenario_schema, format_schema
@@ -60,7 +61,7 @@ OTHER_FOLDERS = {
     "tests/cpp, tests/python": "GoogleTest and pytest suites",
     "bench/": "scripts that print benchmark figures (never timed tests)",
     "docs/": "`architecture.md` (design, plugins, how to add things), `python_api.md`, `scene_file.md`, "
-             "`scenarios.md`, `wear.md`, `benchmarks.md`",
+             "`scenarios.md`, `augmented_photos.md`, `wear.md`, `benchmarks.md`",
     "assets_manifest/": "which assets exist, where they come from, licences, checksums",
     "fuzz/": "libFuzzer targets of every loader, their seed and regression corpora (`corpus/`), the YAML "
              "mutation fuzzer (`fuzz_yaml.py`); `bench/fuzz.sh` runs them",
@@ -144,7 +145,7 @@ def python_layout() -> str:
         rows.append(f"| **`synthgen.{pkg}`** | {_first_sentence(mod.__doc__)} |")
         for m in sorted(pkgutil.iter_modules(mod.__path__), key=lambda m: m.name):
             sub = importlib.import_module(f"synthgen.{pkg}.{m.name}")
-            rows.append(f"| `{pkg}/{m.name}.py` | {_first_sentence(sub.__doc__)} |")
+            rows.append(f"| `{pkg}/{m.name}{'/' if m.ispkg else '.py'}` | {_first_sentence(sub.__doc__)} |")
     return "\n".join(rows)
 
 
@@ -168,6 +169,7 @@ def _code(text: str) -> str:
 BLOCKS: Dict[str, Dict[str, Callable[[], str]]] = {
     "docs/scene_file.md": {"scene-file-reference": lambda: _code(format_schema(SCENE_SCHEMA))},
     "docs/scenarios.md": {"scenario-reference": lambda: _code(format_scenario_schema())},
+    "docs/augmented_photos.md": {"calibration-reference": lambda: _code(format_schema(CALIBRATION_SCHEMA))},
     "docs/architecture.md": {"plugins": plugins_table, "registries": registries_table, "python-layout": python_layout},
     "README.md": {"layout": repo_layout},
 }

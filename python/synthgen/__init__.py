@@ -10,11 +10,13 @@ out by workflow stage, a subpackage each:
                       records generated from the C++ declarations
 ``scene``             scene files, primitives, the demo, wear presets, plates, signs, assets
 ``scenario``          scenarios: validation and the typed records of one frame
+``background``        real photos: calibrations, real labels, the photos of a run
 ``randomize``         object randomizers: sign, plate, decals, wear
 ``frame``             the per-worker frame renderer (set-up, layout, records)
 ``run``               executors, resume, run summaries
 ``outputs``           one module per output format, verification
-``post``              image-space steps (exposure, ...)
+``post``              image-space steps (exposure, ...; ``post.photo``: compositing into
+                      photos, camera matching)
 ``cli``               one module per ``synthgen`` command
 ====================  ===================================================================
 

@@ -269,3 +269,23 @@ def test_a_labelled_car_measures_its_width():
     chk = label_checks(setup)[0]
     assert chk["distance"] == pytest.approx(14.0 - 2.25, rel=0.02)
     assert chk["width"] == pytest.approx(1.8, rel=0.03)
+
+
+def test_the_shipped_calibrations_are_valid():
+    """scenarios/photos/*.yaml validate; their boxes lie inside their photos (sizes from the
+    assets manifest's photos, read when fetched)."""
+    from synthgen.schema.errors import Loc, ValidationContext
+    from synthgen.schema.yaml_io import read_yaml
+    from synthgen.background.sidecar import CALIBRATION_SCHEMA
+
+    root = os.path.join(os.path.dirname(__file__), "..", "..", "scenarios", "photos")
+    sizes = {"dlib_cars_1.yaml": (928, 478), "dlib_cars_2.yaml": (2482, 614)}
+    for name in sorted(os.listdir(root)):
+        path = os.path.join(root, name)
+        data = read_yaml(path)
+        v = CALIBRATION_SCHEMA.validate(data, Loc.root(data), ValidationContext(path, root))
+        w, h = sizes[name]
+        for o in list(v["objects"] or []) + list(v["ignore"] or []):
+            x0, y0, x1, y1 = o["box"]
+            assert 0 <= x0 < x1 <= w and 0 <= y0 < y1 <= h, (name, o)
+        assert v["licence"] and v["region"]

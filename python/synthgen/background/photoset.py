@@ -121,7 +121,21 @@ class PhotoSet:
 
     def __init__(self, background: Mapping[str, Any], base_dir: str, seed: int, cache: int = 4):
         self.bg = background
-        self.paths = expand_photos(list(background["photos"]), base_dir)
+        self.paths: List[str] = []
+        self._calibration: Dict[str, Optional[str]] = {}   # photo -> its entry's calibration file
+        for entry in background["photos"]:
+            if isinstance(entry, str):
+                found, cal = expand_photos([entry], base_dir), None
+            elif entry.get("asset") is not None:
+                from ..scene import assets
+
+                found, cal = [os.path.abspath(assets.resolve(entry["asset"]))], entry.get("calibration")
+            else:
+                found, cal = expand_photos([entry["file"]], base_dir), entry.get("calibration")
+            for p in found:
+                if p not in self._calibration:
+                    self.paths.append(p)
+                    self._calibration[p] = cal
         self.shared = background.get("calibration")
         self.seed = int(seed)
         self._photos: "OrderedDict[str, Photo]" = OrderedDict()
@@ -162,6 +176,7 @@ class PhotoSet:
         if path not in self._setups:
             p = photo or self.photo(i)
             self._setups[path] = read_photo_setup(path, p.width, p.height, shared=self.shared,
+                                                  entry=self._calibration.get(path),
                                                   exif_focal_mm=p.exif_focal_mm, exif_focal_35mm=p.exif_focal_35mm)
         return self._setups[path]
 
@@ -172,7 +187,7 @@ class PhotoSet:
         out = {}
         for i, path in enumerate(self.paths):
             out[path] = file_sha256(path)
-            for f in find_calibration_files(path, self.shared):
+            for f in find_calibration_files(path, self.shared, self._calibration.get(path)):
                 out[f] = file_sha256(f)
             if with_labels:
                 s = self.setup(i)

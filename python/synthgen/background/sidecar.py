@@ -186,9 +186,10 @@ class PhotoSetup:
                 "calibration_files": list(self.files)}
 
 
-def find_calibration_files(photo: str, shared: Optional[str] = None) -> List[str]:
+def find_calibration_files(photo: str, shared: Optional[str] = None, entry: Optional[str] = None) -> List[str]:
     """The calibration files of a photo, the shared ones first: ``shared`` (the scenario's), the
-    folder's ``calibration.yaml``, then the sidecar. Two sidecars for one photo are an error."""
+    folder's ``calibration.yaml``, the sidecar, then ``entry`` (the scenario's photo entry's own).
+    Two sidecars for one photo are an error."""
     out = []
     if shared:
         out.append(os.path.abspath(shared))
@@ -202,6 +203,8 @@ def find_calibration_files(photo: str, shared: Optional[str] = None) -> List[str
                             f"{os.path.basename(sidecars[1])}): keep one")
     if sidecars:
         out.append(os.path.abspath(sidecars[0]))
+    if entry and os.path.abspath(entry) not in out:
+        out.append(os.path.abspath(entry))
     return out
 
 
@@ -256,12 +259,13 @@ class _Reader:
 
 
 def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[str] = None,
-                     exif_focal_mm: float = 0.0, exif_focal_35mm: float = 0.0) -> PhotoSetup:
+                     entry: Optional[str] = None, exif_focal_mm: float = 0.0,
+                     exif_focal_35mm: float = 0.0) -> PhotoSetup:
     """A photo's :class:`PhotoSetup` from its calibration files (see the module docstring);
     ``width`` x ``height``: the photo's size (after EXIF orientation). Raises SceneFileError /
     SynthgenError naming the file, key and reason; a photo without calibration files, without
     intrinsics or without a ground is refused."""
-    files = find_calibration_files(photo, shared)
+    files = find_calibration_files(photo, shared, entry)
     if not files:
         raise SynthgenError(f"{photo}: no calibration (write {os.path.basename(photo)}.yaml beside it, a "
                             f"{FOLDER_FILE} for its folder, or name one in background.calibration; "

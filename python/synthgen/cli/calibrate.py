@@ -47,7 +47,8 @@ def run(args: argparse.Namespace) -> int:
         if chk["distance"] is None:
             print(f"    {chk['class']} {[round(v) for v in chk['box']]}: its bottom is above the horizon")
         else:
-            flag = "" if 1.5 <= chk["width"] <= 2.1 else "  <- a car is 1.6 to 2.0 m wide: check the calibration"
+            flag = "" if 1.5 <= chk["width"] <= 2.1 else \
+                "  <- a car seen from behind is 1.6 to 2.0 m wide (seen at an angle, its box holds its side too)"
             print(f"    {chk['class']} {[round(v) for v in chk['box']]}: {chk['distance']:.1f} m away, "
                   f"{chk['width']:.2f} m wide{flag}")
     print(f"preview: {out}")

@@ -187,12 +187,13 @@ def _lum(rgb: np.ndarray) -> np.ndarray:
 
 
 def exposure_factor(photo: np.ndarray, without: np.ndarray, synthetic_alpha: np.ndarray, ground: np.ndarray,
-                    boxes: Sequence[Sequence[float]], exclude: np.ndarray) -> Tuple[float, str]:
-    """The factor that makes the rendered ground match the photo's: the median over ground
-    pixels in a ring around each object's box (twice its size; none of the object, not a real
-    object) of photo luminance / rendered luminance without the objects; over all the ground
-    when the rings hold fewer than 50 pixels. NOTE: radiance is linear in the lights, so scaling
-    the render afterwards is the same as scaling the lights."""
+                    boxes: Sequence[Sequence[float]], exclude: np.ndarray) -> Tuple[np.ndarray, str]:
+    """Per channel, the factor that makes the rendered ground match the photo's: the luminance
+    factor is the median over ground pixels in a ring around each object's box (twice its size;
+    none of the object, not a real object) of photo / rendered luminance without the objects
+    (over all the ground when the rings hold fewer than 50 pixels); the channels' ratios of
+    means there give the white balance (clamped to 0.7 .. 1.4 of it). NOTE: radiance is linear
+    in the lights, so scaling the render afterwards is the same as scaling the lights."""
     h, w = ground.shape
     ring = np.zeros((h, w), bool)
     for x0, y0, x1, y1 in boxes:
@@ -209,8 +210,11 @@ def exposure_factor(photo: np.ndarray, without: np.ndarray, synthetic_alpha: np.
         sel = usable & (lw > 1e-6)
         where = "the whole ground"
     if sel.sum() < 10:
-        return 1.0, "no ground visible: 1"
-    return float(np.median(lp[sel] / lw[sel])), where
+        return np.ones(3, np.float32), "no ground visible: 1"
+    k = float(np.median(lp[sel] / lw[sel]))
+    chroma = photo[sel].mean(axis=0) / np.maximum(without[sel].mean(axis=0), 1e-9)
+    chroma = chroma / max(float(_lum(chroma[None])[0]), 1e-9)
+    return (k * np.clip(chroma, 0.7, 1.4)).astype(np.float32), where
 
 
 def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
@@ -245,10 +249,12 @@ def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
 
 def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], mode: str,
                        boxes: Sequence[Sequence[float]], real_depth: Optional[np.ndarray],
-                       occluder_mask: Optional[np.ndarray], camera: Any = None
+                       occluder_mask: Optional[np.ndarray], camera: Any = None,
+                       match: Optional[Mapping[str, Any]] = None, rng: Optional[np.random.Generator] = None
                        ) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
     """The composite and the labels of a photo frame (arrays from the render, ``boxes`` the
-    inserted objects' boxes as x0, y0, x1, y1); returns (arrays, meta)."""
+    inserted objects' boxes as x0, y0, x1, y1), then camera matching (``match``: the scenario's
+    background.match); returns (arrays, meta)."""
     ids = np.asarray(arrays["instance_id"])
     depth = np.asarray(arrays["depth"], np.float32)
     ground = (ids == 0) & np.isfinite(depth)
@@ -272,6 +278,22 @@ def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], 
         front |= occluder_mask
     if front.any():
         rgb = np.where(front[..., None], fp.pixels, rgb)
+    camera_info: Dict[str, Any] = {}
+    if match is not None and (match["noise"] or match["blur"] or match["jpeg"] or match["vignetting"] or
+                              match["chromatic_aberration"]):
+        from ..post.photo.camera_match import match_camera
+
+        influence = ((np.asarray(res.synthetic_alpha) > 0) |
+                     np.any(np.asarray(res.catcher_with) != np.asarray(res.catcher_without), axis=2)) & ~front
+        cam = camera if camera is not None else fp.camera()
+        rgb, camera_info = match_camera(
+            fp.pixels, rgb, influence, rng if rng is not None else np.random.default_rng(0),
+            jpeg_quality=fp.photo.jpeg_quality if match["jpeg"] else None, noise=match["noise"],
+            blur=match["blur"], vignetting=match["vignetting"], chromatic=match["chromatic_aberration"],
+            cx=float(cam.cx), cy=float(cam.cy), focal=float(cam.fx),
+            synthetic=np.where(front, 0.0, np.asarray(res.synthetic_alpha)))
+        if front.any():  # what real things hide stays the photo's (blur may have spread into it)
+            rgb = np.where(front[..., None], fp.pixels, rgb)
     out = dict(arrays)
     out["rgb"] = rgb.astype(np.float32)
     out["instance_id"] = np.where(front, 0, ids).astype(ids.dtype)
@@ -284,7 +306,9 @@ def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], 
     for key in ("normal", "albedo"):
         if key in out:
             out[key] = np.where(visible[..., None], out[key], 0.0).astype(np.float32)
-    meta = {"exposure": {"factor": k, "from": where}, "composite": mode,
+    meta = {"exposure": {"factor": float(_lum(k[None])[0]), "white_balance": [float(v) for v in k / _lum(k[None])[0]],
+                         "from": where}, "composite": mode,
+            "camera_match": camera_info,
             "real_occlusion": {"pixels": int((synthetic & front).sum()),
                                "by": [s for s, m in (("depth", real_depth), ("mask", occluder_mask),
                                                      ("real labels", labelled_depth)) if m is not None]}}

@@ -182,7 +182,8 @@ class FrameRenderer:
             boxes = [[b[0], b[1], b[0] + b[2], b[1] + b[3]] for k in range(len(objects)) if keep[k]
                      for b in [mask_bbox(ids == k + 1)] if b is not None]
             arrays, photo_meta = finish_photo_frame(fp, res, arrays, sc.spec["background"]["composite"], boxes,
-                                                    fp.depth, fp.occluders, camera)
+                                                    fp.depth, fp.occluders, camera, sc.spec["background"]["match"],
+                                                    frame_rng(sc.seed, frame, 6))
             hidden = set(np.unique(ids[(ids > 0) & (arrays["instance_id"] == 0)]).tolist())
             for k in range(len(objects)):
                 if keep[k] and objects[k].spec.labelled and (k + 1) in hidden and not (arrays["instance_id"] == k + 1).any():
@@ -212,6 +213,8 @@ class FrameRenderer:
         if spec.post:
             meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]
         timings = {"update_s": t_update - t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
+        if fp is not None:  # compositing, camera matching and labels of a photo frame
+            timings["photo_s"] = time.perf_counter() - t_render
         return arrays, meta, timings
 
     # -- scene set-up of one frame --------------------------------------------------------

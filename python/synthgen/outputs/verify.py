@@ -85,6 +85,7 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
         h, w = ids.shape
         sem_path = os.path.join(out_dir, "semantic", name + ".png")
         sem = _read_u16(sem_path) if os.path.isfile(sem_path) else None
+        meta = read_meta(os.path.join(out_dir, "meta", name + ".json"))
         all_anns = by_image.get(k, [])
         anns = sorted((a for a in all_anns if a.get("source") != "real"), key=lambda a: a["instance_id"])
         real = [a for a in all_anns if a.get("source") == "real" and not a["iscrowd"]]

@@ -106,11 +106,32 @@ PLACEMENT = Record(
      "max_retries": Integer(20, min=0, max=10000, doc="layouts tried before objects are dropped")},
     default=EMPTY, doc="placement on the ground plane (y = 0)")
 
+class _PhotoEntry(Field):
+    """A photo entry: a path / glob / folder, or {file | asset, calibration}."""
+
+    type_name = "path, glob or folder, or {file | asset, calibration}"
+    RECORD = Record({"file": String(None, doc="photo file, glob or folder"),
+                     "asset": String(None, doc="asset id (kind photo) of assets_manifest"),
+                     "calibration": FilePath(None, doc="this photo's calibration file")},
+                    one_of=[("file", "asset")])
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        if isinstance(value, str):
+            return String().validate(value, loc, ctx)
+        if isinstance(value, dict):
+            return self.RECORD.validate(value, loc, ctx)
+        ctx.error(loc, f"expected a {self.type_name}, got {show_value(value)}")
+
+    def describe(self) -> str:
+        return self.type_name
+
+
 #: Real photos as backgrounds (synthgen.background; docs/augmented_photos.md).
 BACKGROUND = Record(
-    {"photos": ListOf(String(), REQUIRED, min_items=1,
-                      doc="photo files, globs (`photos/*.jpg`) or folders, relative to the scenario; each photo has "
-                          "a calibration: PHOTO.yaml beside it, a calibration.yaml for its folder, or `calibration`"),
+    {"photos": ListOf(_PhotoEntry(), REQUIRED, min_items=1,
+                      doc="photo files, globs (`photos/*.jpg`) or folders, relative to the scenario, or {file | asset, "
+                          "calibration} entries; each photo has a calibration: the entry's, PHOTO.yaml beside it, a "
+                          "calibration.yaml for its folder, or `calibration`"),
      "calibration": FilePath(None, doc="a calibration file for every photo (sidecars override its keys)"),
      "unlabelled_ok": Bool(False, doc="accept photos that declare no real labels (labels or objects in their "
                                       "calibration): a car in the photo left unlabelled teaches a detector that cars "
@@ -127,6 +148,17 @@ BACKGROUND = Record(
      "max_real_overlap": Number(0.5, min=0.0, max=1.0,
                                 doc="an inserted object and a real object (or an ignore region) may overlap by at most "
                                     "this fraction of the farther one's box (the one hidden)"),
+     "match": Record({"noise": Bool(True, doc="the photo's noise (sigma^2 = a y + b, fitted in sRGB) on what the "
+                                               "objects changed"),
+                      "blur": Bool(True, doc="blur the objects to the photo's sharpness"),
+                      "jpeg": Bool(True, doc="re-encode the frame at the photo's estimated JPEG quality (JPEG "
+                                             "photos)"),
+                      "vignetting": Number(0.0, min=0.0, max=1.0, doc="cos^4 falloff on the objects (0: none, 1: a "
+                                                                      "thin lens's)"),
+                      "chromatic_aberration": Number(0.0, min=-5.0, max=5.0,
+                                                     doc="lateral colour fringes on the objects: red/blue displaced "
+                                                         "by this many pixels at the image corner")},
+                     default=EMPTY, doc="camera matching: what the photo's camera did, applied to the objects"),
      "ground_albedo": Vector(3, None, min=0.0, max=1.0, broadcast=True,
                              doc="albedo of the ground that catches shadows (default: 0.15 with the photo's ground "
                                  "colour; ratio compositing cancels it to first order)")},

@@ -54,14 +54,15 @@ def _buffers(render: Mapping[str, np.ndarray] | object):
 def composite(photo: np.ndarray, render, mode: str = "ratio", exposure: float = 1.0) -> np.ndarray:
     """The photo (H x W x 3, linear float) with the render's inserted objects, their shadows and
     reflections. ``render``: a RenderResult or a mapping with its five differential buffers.
-    ``exposure`` scales the render into the photo's units (radiance is linear in the lights, so
-    this equals scaling every light); ratios are unchanged by it."""
+    ``exposure`` scales the render into the photo's units, one number or one per channel (white
+    balance; radiance is linear in the lights, so this equals scaling every light); ratios are
+    unchanged by it."""
     if mode not in MODES:
         raise SynthgenError(f"composite: mode '{mode}' is not one of {', '.join(MODES)}")
     O, a, W, Wo, B = _buffers(render)
-    k = np.float32(exposure)
-    if not (np.isfinite(k) and k > 0):
-        raise SynthgenError(f"composite: exposure must be a positive number, got {exposure}")
+    k = np.asarray(exposure, np.float32)
+    if k.shape not in ((), (3,)) or not (np.all(np.isfinite(k)) and np.all(k > 0)):
+        raise SynthgenError(f"composite: exposure must be a positive number or 3 of them, got {exposure}")
     P = np.asarray(photo, np.float32)
     if P.shape != W.shape:
         raise SynthgenError(f"composite: the photo is {P.shape[1]} x {P.shape[0]} but the render "

@@ -1,0 +1,76 @@
+"""Camera matching (synthgen.post.photo.camera_match): the photo's noise model, blur and JPEG
+quality are recovered from images made with known ones, and a clean, sharp object inserted into
+a noisy, soft photo comes out with the photo's noise and sharpness."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from synthgen.post.photo.camera_match import (fit_noise, gaussian_blur, jpeg_roundtrip, linear, match_blur,
+                                              match_camera, noise_sigma, ring_statistics, sharpness, srgb)
+
+
+def _scene(h=360, w=540):
+    ys, xs = np.mgrid[0:h, 0:w]
+    clean = (0.1 + 0.8 * xs / w) * (0.6 + 0.4 * np.sin(ys / 40.0))
+    clean[100:200, 100:250] *= 0.5
+    clean[250:330, 300:500] = 0.85
+    return clean
+
+
+@pytest.mark.parametrize("a,b", [(0.004, 0.0004), (0.001, 0.001), (0.0005, 0.00005)])
+def test_poisson_gaussian_noise_is_recovered(a, b):
+    rng = np.random.default_rng(11)
+    clean = _scene()
+    noisy = np.clip(clean + rng.standard_normal(clean.shape) * np.sqrt(a * clean + b), 0.0, 1.0)
+    f = fit_noise(noisy)
+    print(f"\nnoise fit: a {f['a']:.6g} (true {a:g}, {f['a'] / a - 1:+.1%}), b {f['b']:.6g} (true {b:g}, "
+          f"{f['b'] / b - 1:+.1%})")
+    assert f["a"] == pytest.approx(a, rel=0.15) and f["b"] == pytest.approx(b, rel=0.15)
+
+
+@pytest.mark.parametrize("sigma", [0.7, 1.3, 2.2])
+def test_blur_is_recovered(sigma):
+    sharp = np.full((200, 220), 0.1)
+    sharp[:, 110:] = 0.8
+    sharp[50:150, 30:70] = 0.5
+    target = sharpness(gaussian_blur(sharp, sigma))
+    assert match_blur(sharp, target, np.ones(sharp.shape, bool)) == pytest.approx(sigma, rel=0.1)
+    assert match_blur(gaussian_blur(sharp, 3.0), target, np.ones(sharp.shape, bool)) == 0.0
+
+
+def test_jpeg_roundtrip_degrades_with_quality():
+    rng = np.random.default_rng(2)
+    img = linear(np.clip(_scene(96, 128)[..., None] + 0.05 * rng.standard_normal((96, 128, 3)), 0, 1))
+    err = {q: float(np.abs(srgb(jpeg_roundtrip(img, q)) - srgb(img)).mean()) for q in (30, 75, 95)}
+    assert err[30] > err[75] > err[95] > 0
+
+
+def test_an_inserted_object_gets_the_photos_noise_and_sharpness():
+    rng = np.random.default_rng(5)
+    a, b, blur = 0.002, 0.0002, 1.2
+    h, w = 300, 400
+    clean = _scene(h, w)
+    photo_enc = np.clip(gaussian_blur(clean, blur) + rng.standard_normal((h, w)) * np.sqrt(a * clean + b), 0, 1)
+    photo = linear(np.repeat(photo_enc[..., None], 3, axis=2))
+    # A clean, sharp object (with a pattern: edges to measure) pasted in.
+    obj = np.zeros((h, w), bool)
+    obj[120:220, 150:300] = True
+    comp = photo.copy()
+    pattern = np.where(((np.arange(w)[None, :] // 12) % 2 == 0), 0.15, 0.55) * np.ones((h, 1))
+    comp[obj] = linear(np.repeat(pattern[..., None], 3, axis=2))[obj]
+    out, info = match_camera(photo, comp, obj, np.random.default_rng(1), synthetic=obj.astype(np.float32))
+    fit = fit_noise(srgb(photo), ~obj)
+    st = ring_statistics(srgb(out), obj, (150, 120, 300, 220), fit)
+    photo_sharp = sharpness(srgb(linear(np.repeat(np.clip(gaussian_blur(
+        np.where(obj, pattern, clean), blur), 0, 1)[..., None], 3, axis=2))), obj)
+    got_sharp = sharpness(srgb(out), obj)
+    print(f"\nmatched: noise ratio {st['noise_ratio']:.3f}, sharpness {got_sharp:.3f} vs the photo camera's "
+          f"{photo_sharp:.3f}, blur {info['blur_sigma_px']:.2f} px (true {blur})")
+    assert st["noise_ratio"] == pytest.approx(1.0, abs=0.2)
+    assert got_sharp == pytest.approx(photo_sharp, rel=0.2)
+    assert info["blur_sigma_px"] == pytest.approx(blur, rel=0.25)
+    # Outside what the object changed (and the few pixels blur spreads it), the photo is untouched.
+    far = np.ones((h, w), bool)
+    far[110:230, 140:310] = False
+    assert np.array_equal(out[far], photo[far])
