@@ -187,3 +187,23 @@ def test_resume_refuses_when_a_photo_was_added(photo_dir, tmp_path, capsys):
     os.symlink(d / "street.exr", p / "b.exr")
     assert main(["run", scen, "-o", out, "--resume", "--no-progress"]) == 2
     assert "b.exr" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("sun, lighting", [
+    ("sun: {overcast: true}\n", "overcast"),
+    ("", "the scenario's lights (fallback"),
+    ("sun:\n  shadow: {base: [100, 100], tip: [60, 110], height: 2.0}\n", "sky with the photo's sun (marked shadow)"),
+])
+def test_the_light_follows_what_the_photo_says(photo_dir, tmp_path, sun, lighting):
+    d, _ = photo_dir
+    p = tmp_path / "photos"
+    p.mkdir()
+    os.symlink(d / "street.exr", p / "street.exr")
+    cal = CALIBRATION.replace(f"sun: {{azimuth: {SUN[0]}, elevation: {SUN[1]}}}\n", sun) + "objects: []\n"
+    (p / "street.exr.yaml").write_text(cal)
+    f = next(sg.Scenario(_scenario(tmp_path, count=1)).frames())
+    assert f.meta["background"]["lighting"].startswith(lighting)
+    assert bool(f.meta["background"].get("lighting_fallback")) == ("fallback" in lighting)
+    if "shadow" in sun:
+        assert f.meta["lights"][0]["type"] == "sky"
+        assert 0 < f.meta["background"]["sun"]["elevation"] < 90

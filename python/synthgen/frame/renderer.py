@@ -111,6 +111,29 @@ class FrameRenderer:
             pl = P.ground() if g["size"] is None else P.plane(float(g["size"]), float(g["size"]))
             gm = self.scene.add_mesh(pl["positions"], pl["indices"], normals=pl["normals"], uvs=pl["uvs"], name="ground")
             self.ground = self.scene.add_instance(gm, np.eye(4), class_id=0, instance_id=0)
+            if g["backplate"]:
+                self.scene.set_instance_catcher(self.ground, True)
+
+    def _backplate(self, res: Any, rs: Mapping[str, Any], seed: int) -> Tuple[np.ndarray, Dict[str, Any]]:
+        """The frame over the environment's own image: the camera's view of the lights alone
+        (every instance hidden: each ray sees the map), the ground a catcher (ratio composite)."""
+        from ..post.photo.composite import composite
+
+        shown = [i for i in range(self.scene.instance_count()) if self._visible(i)]
+        for i in shown:
+            self.scene.set_instance_visible(i, False)
+        try:
+            plate = np.array(self.scene.render(spp=rs["spp"], max_depth=1, seed=seed, threads=self.threads).rgb)
+        finally:
+            for i in shown:
+                self.scene.set_instance_visible(i, True)
+        return composite(plate, res, "ratio"), {"backplate": "the environment's own image", "composite": "ratio"}
+
+    def _visible(self, i: int) -> bool:
+        try:
+            return self.scene.instance_visible(i)
+        except Exception:  # removed slots
+            return False
 
     def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
         """(arrays, meta, timings) of one frame."""
@@ -174,6 +197,8 @@ class FrameRenderer:
                   "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id),
                   "normal": np.asarray(res.normal), "albedo": np.asarray(res.albedo)}
         photo_meta = None
+        if fp is None and self.ground is not None and sc.spec["ground"]["backplate"]:
+            arrays["rgb"], photo_meta = self._backplate(res, rs, render_seed)
         if fp is not None:
             from ..outputs.coco import mask_bbox
             from .photo import finish_photo_frame, real_object_records
@@ -205,6 +230,8 @@ class FrameRenderer:
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
         }
+        if fp is None and photo_meta is not None:
+            meta["background"] = photo_meta
         if fp is not None:
             # Frames of one photo share its content: one split for all of them.
             meta["split_keys"].append(f"photo:{fp.photo.sha256}")

@@ -123,6 +123,16 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
             if isinstance(li, dict) and li.get("type") == "envmap":
                 if li.get("asset") is not None:
                     _check_assets(li["asset"], li.locs["asset"], ctx, "hdr")
+    g = spec["ground"]
+    if g["backplate"]:
+        if not g["enabled"]:
+            ctx.error(g.locs.get("backplate", g.loc), "backplate needs the ground (enabled: true)")
+        for setup in setups:
+            if not any(isinstance(li, dict) and li.get("type") == "envmap" for li in setup):
+                ctx.error(g.locs.get("backplate", g.loc), "backplate needs an envmap light in every light set-up (the "
+                                                          "environment's own image is the background)")
+        if spec["background"] is not None:
+            ctx.error(g.locs.get("backplate", g.loc), "backplate and background: a photo is the background already")
     pl = spec["placement"]
     for o in spec["objects"]:
         lo = o["min_visible_fraction"] if o["min_visible_fraction"] is not None else pl["min_visible_fraction"]

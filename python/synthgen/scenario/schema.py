@@ -198,6 +198,10 @@ SCENARIO_SCHEMA = Record(
                                       doc="edge length in metres of a square ground (default: the ground reaches "
                                           "the horizon)"),
                        "enabled": Bool(True, doc="false: no ground (objects float in the sky)"),
+                       "backplate": Bool(False, doc="the ground catches the objects' shadows over the environment "
+                                                    "map's own image (an envmap light needed): the HDR's ground and "
+                                                    "horizon are the background, no plane with an edge; the "
+                                                    "material's albedo only guides the shadows (ratio compositing)"),
                        "material": R(MATERIAL, default={"type": "diffuse", "albedo": [0.3, 0.3, 0.3]})},
                       default=EMPTY, doc="ground plane y = 0 (class 0, unlabelled)"),
      "objects": ListOf(OBJECT, REQUIRED, min_items=1, doc="object kinds"),
