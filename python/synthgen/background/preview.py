@@ -1,6 +1,6 @@
 """The picture a user checks a calibration by (``synthgen calibrate PHOTO``): the photo with its
 horizon, a metric grid on the ground, the placement region, the real labels and ignore regions,
-and a reference car (4.5 x 1.8 x 1.5 m) at three distances along the road; and, per labelled
+and a reference car (4.5 x 1.8 x 1.5 m) at three distances ahead, turned along the road; and, per labelled
 car, the width the calibration gives it (a real car is 1.6 to 2.0 m wide)."""
 from __future__ import annotations
 
@@ -98,12 +98,9 @@ def draw_preview(image_srgb: np.ndarray, setup: PhotoSetup, path: str) -> None:
         col = (0.6, 0.6, 0.6) if o.ignore else (1.0, 0.85, 0.1)
         ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec=col, lw=lw, ls=":" if o.ignore else "-"))
         ax.text(x0, y0 - 2, "ignore" if o.ignore else o.cls, color=col, fontsize=7)
-    # The reference car at three distances, along the road.
+    # The reference car at three distances ahead of the camera, turned along the road.
     for d, lateral in zip(REFERENCE_DISTANCES, (-3.0, 0.0, 3.0)):
-        a = math.radians(rd)
-        cx = -math.sin(a) * d + math.cos(a) * lateral
-        cz = math.cos(a) * d + math.sin(a) * lateral
-        c = box_corners(cx, cz, rd, REFERENCE_CAR)
+        c = box_corners(lateral, d, rd, REFERENCE_CAR)
         for i, j in [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]:
             uv = _segment(cal, c[i], c[j], 8)
             ax.plot(uv[:, 0], uv[:, 1], color=(1.0, 0.2, 0.8), lw=1.2 * lw)

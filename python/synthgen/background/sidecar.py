@@ -80,12 +80,15 @@ _GROUND = Record(
      "roll": Number(None, min=-45.0, max=45.0, doc="degrees the camera is turned clockwise about its axis"),
      "horizon": _Horizon(None, doc="the horizon: an image row, or two [u, v] points on it (then the roll "
                                    "follows too); with camera_height, instead of pitch and roll"),
+     "from_depth": Bool(False, doc="fit the ground plane to the photo's depth map (its region, else its lower "
+                                   "third; RANSAC): for scenes without a horizon, such as a room's floor"),
      "plane": Record({"normal": Vector(3, doc="normal (pointing up) in camera coordinates (OpenCV: x right, "
                                               "y down, z forward)"),
                       "offset": Number(min=0.0, min_open=True, doc="d of n . X + d = 0: the camera height "
                                                                    "when n is a unit vector")},
                      default=None, doc="the ground plane n . X + d = 0 in camera coordinates")},
-    exclusive=[(("pitch", "roll"), ("horizon",)), (("plane",), ("camera_height", "pitch", "roll", "horizon"))],
+    exclusive=[(("pitch", "roll"), ("horizon",)), (("plane",), ("camera_height", "pitch", "roll", "horizon")),
+               (("from_depth",), ("plane", "camera_height", "pitch", "roll", "horizon"))],
     default=None, doc="where the ground is: camera_height + pitch (+ roll), camera_height + horizon, or plane")
 
 _SHADOW = Record(
@@ -186,6 +189,55 @@ class PhotoSetup:
                 "calibration_files": list(self.files)}
 
 
+def fit_ground_plane(depth: np.ndarray, k: Dict[str, float], regions: List[np.ndarray],
+                     iterations: int = 400, tolerance: float = 0.02) -> Tuple[np.ndarray, float, int]:
+    """(normal pointing at the camera, offset, inlier count) of the plane n . X + d = 0 (camera
+    coordinates) that most of the depth map's points in ``regions`` (default: its lower third)
+    lie on within ``tolerance`` metres x their distance / 10 m.
+
+    NOTE: RANSAC (Fischler & Bolles 1981) with a fixed seed (deterministic), then a least-squares
+    refit on the inliers (the smallest eigenvector of their covariance)."""
+    from .labels import polygon_mask
+
+    h, w = depth.shape
+    if regions:
+        mask = np.zeros((h, w), bool)
+        for p in regions:
+            mask |= polygon_mask(p, w, h)
+    else:
+        mask = np.zeros((h, w), bool)
+        mask[2 * h // 3:] = True
+    mask &= np.isfinite(depth)
+    ys, xs = np.nonzero(mask)
+    if len(ys) < 100:
+        raise SynthgenError("from_depth: fewer than 100 pixels with a depth in the ground's region")
+    step = max(1, len(ys) // 20000)
+    ys, xs = ys[::step], xs[::step]
+    z = depth[ys, xs].astype(np.float64)
+    pts = np.stack([(xs + 0.5 - k["cx"]) / k["fx"] * z, (ys + 0.5 - k["cy"]) / k["fy"] * z, z], 1)
+    tol = tolerance * np.maximum(z / 10.0, 0.1)
+    rng = np.random.default_rng(0)
+    best, best_n = None, -1
+    for _ in range(iterations):
+        a, b, c = pts[rng.choice(len(pts), 3, replace=False)]
+        n = np.cross(b - a, c - a)
+        if np.linalg.norm(n) < 1e-12:
+            continue
+        n /= np.linalg.norm(n)
+        inl = np.abs((pts - a) @ n) < tol
+        if inl.sum() > best_n:
+            best, best_n = inl, int(inl.sum())
+    if best is None or best_n < 50:
+        raise SynthgenError("from_depth: no plane found in the depth map's ground region")
+    q = pts[best]
+    centre = q.mean(axis=0)
+    n = np.linalg.eigh(np.cov((q - centre).T))[1][:, 0]
+    d = -float(n @ centre)
+    if d < 0:  # the normal towards the camera: the camera (origin) on its positive side
+        n, d = -n, -d
+    return n, d, best_n
+
+
 def find_calibration_files(photo: str, shared: Optional[str] = None, entry: Optional[str] = None) -> List[str]:
     """The calibration files of a photo, the shared ones first: ``shared`` (the scenario's), the
     folder's ``calibration.yaml``, the sidecar, then ``entry`` (the scenario's photo entry's own).
@@ -254,8 +306,14 @@ class _Reader:
         raise SynthgenError(f"{self.photo}: {reason}")
 
     def path(self, key: str, value: str, sub: Optional[str] = None) -> str:
+        """A file a calibration names: relative to the calibration file, else to the photo's folder
+        (a calibration kept apart from photos fetched into the asset cache names their labels)."""
         _, ctx, loc = self.values[key]
-        return _path(ctx, value, Loc(f"{loc.path}.{sub}" if sub else loc.path, loc.line, loc.column))
+        loc = Loc(f"{loc.path}.{sub}" if sub else loc.path, loc.line, loc.column)
+        beside = os.path.join(os.path.dirname(self.photo), os.path.expanduser(value))
+        if not os.path.isabs(value) and not os.path.isfile(os.path.join(ctx.base_dir, value)) and os.path.isfile(beside):
+            return os.path.abspath(beside)
+        return _path(ctx, value, loc)
 
 
 def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[str] = None,
@@ -330,7 +388,24 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
     g = r.get("ground") or {}
     height_m = g.get("camera_height") if g.get("camera_height") is not None else extra.get("camera_height")
     pitch = roll = None
-    if g.get("plane") is not None:
+    if g.get("from_depth"):
+        if r.get("depth") is None:
+            r.error("ground", "from_depth needs the photo's depth map (depth)")
+        d = dict(r.get("depth"))
+        d["file"] = r.path("depth", d["file"], "file")
+        probe = PhotoSetup(photo=photo, calibration=Calibration(width=int(width), height=int(height), fx=float(k["fx"]),
+                                                                fy=float(k["fy"]), cx=float(k["cx"]), cy=float(k["cy"]),
+                                                                camera_height=1.0), depth=d)
+        from .photoset import read_depth
+
+        z = read_depth(probe, int(width), int(height))
+        try:
+            normal, offset, inliers = fit_ground_plane(z, k, list(r.get("region") or []))
+        except SynthgenError as e:
+            r.error("ground", str(e))
+        height_m, pitch, roll = ground_from_plane(normal, offset)
+        sources.append(f"ground plane fitted to the depth map ({inliers} points)")
+    elif g.get("plane") is not None:
         height_m, pitch, roll = ground_from_plane(g["plane"]["normal"], g["plane"]["offset"])
         sources.append("ground plane")
     elif g.get("horizon") is not None:

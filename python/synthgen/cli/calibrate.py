@@ -58,5 +58,5 @@ def run(args: argparse.Namespace) -> int:
 register(Command("calibrate", "check a photo's calibration on a preview",
                  "Read a photo's calibration (PHOTO.yaml, the folder's calibration.yaml, or --calibration) and "
                  "draw it over the photo: the horizon, a metric ground grid, the placement region, the real labels "
-                 "and ignore regions, and a reference car at 8, 15 and 30 m along the road. Prints the calibration "
+                 "and ignore regions, and a reference car at 8, 15 and 30 m ahead, turned along the road. Prints the calibration "
                  "and the width it gives each labelled car.", add_arguments, run, order=47, module=__name__))
