@@ -45,6 +45,10 @@ def test_limits_are_per_entry_and_drops_are_reported(tmp_path, capsys):
     # The command's exit status says so (3: written, with objects dropped).
     assert cli.main(["run", scen, "-o", str(tmp_path / "ds2"), "-n", "3", "--no-progress"]) == 3
     assert "objects dropped" in capsys.readouterr().out
+    # Unless the scenario expects drops (crowded photos): reported, exit status 0.
+    assert cli.main(["run", scen, "-o", str(tmp_path / "ds3"), "-n", "3", "--no-progress",
+                     "--set", "placement.allow_drops=true"]) == 0
+    assert "(placement.allow_drops)" in capsys.readouterr().out
 
 
 def test_a_run_without_drops_exits_0(tmp_path):

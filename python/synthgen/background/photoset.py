@@ -210,6 +210,39 @@ class PhotoSet:
                     "'objects: []' when there are none), or set background.unlabelled_ok: true")
         return len(self.paths)
 
+    @staticmethod
+    def _crop(setup: PhotoSetup, sw: int, sh: int, w: int, h: int, rng: np.random.Generator) -> Tuple[int, int]:
+        """The top-left corner of a w x h crop of the photo scaled to sw x sh: uniform, but among
+        up to 16 draws the first whose share of the placement region is at least half the best
+        share any crop can have (so crops show ground to put objects on)."""
+        if (sw, sh) == (w, h):
+            return 0, 0
+        if not setup.regions:
+            return int(rng.integers(0, sw - w + 1)), int(rng.integers(0, sh - h + 1))
+        from .labels import polygon_mask
+
+        f = 8.0  # the region at 1/8 scale
+        sx, sy = sw / setup.calibration.width, sh / setup.calibration.height
+        mw, mh = max(1, int(sw / f)), max(1, int(sh / f))
+        mask = np.zeros((mh, mw), bool)
+        for p in setup.regions:
+            mask |= polygon_mask(np.asarray(p) * [sx / f, sy / f], mw, mh)
+        integral = np.pad(mask.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+
+        def share(x0: int, y0: int) -> float:
+            a, b = int(x0 / f), int(y0 / f)
+            c, d = min(mw, a + max(1, int(w / f))), min(mh, b + max(1, int(h / f)))
+            return float(integral[d, c] - integral[b, c] - integral[d, a] + integral[b, a]) / max((c - a) * (d - b), 1)
+
+        best = max(share(x, y) for x in np.linspace(0, sw - w, 9).astype(int) for y in np.linspace(0, sh - h, 5).astype(int))
+        draws = []
+        for _ in range(16):
+            x0, y0 = int(rng.integers(0, sw - w + 1)), int(rng.integers(0, sh - h + 1))
+            draws.append((share(x0, y0), x0, y0))
+            if draws[-1][0] >= 0.5 * best:
+                return x0, y0
+        return max(draws)[1:]
+
     def frame(self, frame: int, resolution: Tuple[int, int], rng: np.random.Generator, zoom: float) -> FramePhoto:
         i = self.index_for_frame(frame)
         photo = self.photo(i)
@@ -218,8 +251,7 @@ class PhotoSet:
         # The smallest scale that covers the image, then zoom; a random crop of the result.
         scale = max(w / photo.width, h / photo.height) * float(zoom)
         sw, sh = max(w, int(round(photo.width * scale))), max(h, int(round(photo.height * scale)))
-        x0 = int(rng.integers(0, sw - w + 1))
-        y0 = int(rng.integers(0, sh - h + 1))
+        x0, y0 = self._crop(setup, sw, sh, w, h, rng)
         scaled = resize_linear(photo.pixels, sw, sh) if (sw, sh) != (photo.width, photo.height) else photo.pixels
         sx, sy = sw / photo.width, sh / photo.height
         cal = setup.calibration.scaled(sx) if abs(sx - sy) < 1e-9 else _scaled_xy(setup.calibration, sx, sy)

@@ -33,10 +33,11 @@ def run(args: argparse.Namespace) -> int:
         return EXIT_INTERRUPTED
     if summary["failures"]:
         return 1
-    return EXIT_DROPPED if summary["dropped"] else 0
+    return EXIT_DROPPED if summary["dropped"] and not summary.get("drops_allowed") else 0
 
 
 register(Command("run", "render a scenario into a labelled dataset",
                  "Render the frames of a scenario file into a dataset: images, depth, instance and semantic masks, "
                  "COCO / YOLO / KITTI labels, per-frame metadata. Exit status: 0 done, 1 some frames failed, 3 every "
-                 "frame written but some objects dropped (placement limits not met), 2 bad input, 130 interrupted.", add_arguments, run, order=30, module=__name__))
+                 "frame written but some objects dropped (placement limits not met; 0 with placement.allow_drops), 2 bad input, "
+                 "130 interrupted.", add_arguments, run, order=30, module=__name__))

@@ -63,7 +63,8 @@ class RunSummary(dict):
         if dropped:
             n = sum(len(d["objects"]) for d in dropped)
             lines.append(f"objects dropped (their placement limits not met after the retries): {n} in "
-                         f"{len(dropped)} frame(s); the frames are kept without them")
+                         f"{len(dropped)} frame(s); the frames are kept without them"
+                         + (" (placement.allow_drops)" if self.get("drops_allowed") else ""))
             for d in dropped[:10]:
                 lines.append(f"  frame {d['frame']}: " + "; ".join(f"object {o['index']} ({o['class']}): "
                                                               f"{o['reason']}" for o in d["objects"]))
@@ -162,6 +163,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         interrupted=interrupted, temporaries_removed=removed, complete=len(complete),
         incomplete=[{"frame": k, "reason": r} for k, r in broken.items()], aborted=aborted,
         dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),
-                       key=lambda d: d["frame"]))
+                       key=lambda d: d["frame"]),
+        drops_allowed=bool(sc.spec["placement"]["allow_drops"]))
     write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
     return summary

@@ -103,7 +103,10 @@ PLACEMENT = Record(
      "max_visible_fraction": Number(1.0, min=0.0, max=1.0,
                                     doc="at most this visible (e.g. < 1 to ask for occluded or truncated objects)"),
      "min_pixels": Integer(1, min=0, doc="visible pixels of every object"),
-     "max_retries": Integer(20, min=0, max=10000, doc="layouts tried before objects are dropped")},
+     "max_retries": Integer(20, min=0, max=10000, doc="layouts tried before objects are dropped"),
+     "allow_drops": Bool(False, doc="objects that find no place after the retries are left out of their frame as "
+                                    "expected (a crowded photo), still listed in the metadata and the run summary, "
+                                    "without exit status 3")},
     default=EMPTY, doc="placement on the ground plane (y = 0)")
 
 class _PhotoEntry(Field):
