@@ -263,13 +263,15 @@ def test_write_frame_is_a_pure_writer(tmp_path):
 def test_ctrl_c_stops_cleanly_and_keeps_completed_frames(tmp_path):
     slow = str(tmp_path / "slow.yaml")
     with open(TINY) as f, open(slow, "w") as g:
-        # Many frames: the interrupt must come before the run ends, however fast or loaded the
-        # machine (a clean clone's run, with another test suite beside it, did all 40 first).
+        # Many frames: the interrupt comes before the run ends, however fast the machine.
         g.write(f.read().replace("render: {spp: 4,", "render: {spp: 128,").replace("count: 6", "count: 1000"))
     out = str(tmp_path / "ds")
     env = dict(os.environ, PYTHONPATH=os.path.join(REPO, "python"))
+    # A test run started in the background by a shell inherits SIGINT ignored (POSIX), and Python
+    # then installs no KeyboardInterrupt handler: the child gets the default disposition back.
     p = subprocess.Popen([sys.executable, "-m", "synthgen", "run", slow, "-o", out, "--no-progress"], env=env,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 60
     while time.time() < deadline and len(completed_frames(out) if os.path.isdir(out) else []) < 2:
         time.sleep(0.1)
