@@ -74,3 +74,28 @@ def test_an_inserted_object_gets_the_photos_noise_and_sharpness():
     far = np.ones((h, w), bool)
     far[110:230, 140:310] = False
     assert np.array_equal(out[far], photo[far])
+
+
+def test_the_objects_monte_carlo_noise_is_filtered_but_not_their_edges():
+    from synthgen.post.photo.camera_match import denoise_objects
+
+    rng = np.random.default_rng(3)
+    h, w = 80, 120
+    ids = np.zeros((h, w), np.uint32)
+    ids[10:70, 10:110] = 1
+    albedo = np.zeros((h, w, 3), np.float32)
+    albedo[ids == 1] = 0.2
+    albedo[10:70, 60:110] = 0.7  # a paint edge at x = 60
+    clean = albedo * 0.8
+    noisy = clean + rng.normal(0, 0.03, (h, w, 3)).astype(np.float32) * (ids == 1)[..., None]
+    normal = np.zeros((h, w, 3), np.float32)
+    normal[..., 2] = 1
+    inside = ids == 1
+    out = denoise_objects(noisy, inside, ids, albedo, normal)
+    inner = np.zeros((h, w), bool)
+    inner[14:66, 14:56] = True
+    assert np.std(out[inner] - clean[inner]) < np.std(noisy[inner] - clean[inner]) / 3
+    # The edge stays a step: the columns beside it keep their own albedo's level.
+    assert abs(out[20:60, 59].mean() - clean[20:60, 59].mean()) < 0.01
+    assert abs(out[20:60, 60].mean() - clean[20:60, 60].mean()) < 0.01
+    assert np.array_equal(out[~inside], noisy[~inside])

@@ -291,7 +291,8 @@ def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], 
             jpeg_quality=fp.photo.jpeg_quality if match["jpeg"] else None, noise=match["noise"],
             blur=match["blur"], vignetting=match["vignetting"], chromatic=match["chromatic_aberration"],
             cx=float(cam.cx), cy=float(cam.cy), focal=float(cam.fx),
-            synthetic=np.where(front, 0.0, np.asarray(res.synthetic_alpha)))
+            synthetic=np.where(front, 0.0, np.asarray(res.synthetic_alpha)), ids=ids,
+            albedo=arrays.get("albedo"), normal=arrays.get("normal"), denoise=match["denoise"])
         if front.any():  # what real things hide stays the photo's (blur may have spread into it)
             rgb = np.where(front[..., None], fp.pixels, rgb)
     out = dict(arrays)
