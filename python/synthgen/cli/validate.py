@@ -17,7 +17,12 @@ def run(args: argparse.Namespace) -> int:
 
     sc = load_scenario(args.scenario, scenario_overrides(args))
     checked = check_inputs(sc)
-    files = ", ".join(f"{n} {k}{'s' if n != 1 else ''}" for k, n in sorted(checked.items())) or "no input files"
+    plural = {"mesh": "meshes", "environment map": "environment maps"}
+
+    def name(kind: str, n: int) -> str:
+        return kind if n == 1 else plural.get(kind, kind + "s")
+
+    files = ", ".join(f"{n} {name(k, n)}" for k, n in sorted(checked.items())) or "no input files"
     print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "
           f"classes: {', '.join(sc.class_names)}; loaded {files})")
     return 0
