@@ -330,3 +330,28 @@ def test_labelme_polygons_of_a_real_street_photo():
     assert sorted(o.cls for o in s.objects) == ["car", "truck", "truck"]
     assert all(o.polygon is not None and len(o.polygon) >= 8 for o in s.objects)
     assert s.road_direction == 90 and s.overcast
+
+
+def test_kitti_and_cityscapes_files_in_a_calibration(tmp_path):
+    photo = _photo(tmp_path, "000123.png", 1242, 375)
+    (tmp_path / "calib.txt").write_text("P2: 7.215377e+02 0 6.095593e+02 4.48e+01 0 7.215377e+02 1.728540e+02 0.2 "
+                                        "0 0 1 0.0027\n")
+    (tmp_path / "000123.png.yaml").write_text("kitti: {file: calib.txt}\nground: {camera_height: 1.65, pitch: 0}\n"
+                                              "objects: []\n")
+    c = read_photo_setup(photo, 1242, 375).calibration
+    assert (c.fx, c.cx, c.cy, c.camera_height) == pytest.approx((721.5377, 609.5593, 172.854, 1.65))
+    assert "KITTI P2" in c.source
+    photo = _photo(tmp_path, "aachen.png", 2048, 1024)
+    (tmp_path / "camera.json").write_text(json.dumps({
+        "extrinsic": {"baseline": 0.2, "pitch": 0.05, "roll": 0.0, "x": 1.7, "y": 0.1, "yaw": 0.01, "z": 1.2},
+        "intrinsic": {"fx": 2262.5, "fy": 2265.3, "u0": 1097.0, "v0": 513.1}}))
+    (tmp_path / "aachen.png.yaml").write_text("cityscapes: camera.json\nobjects: []\n")
+    s = read_photo_setup(photo, 2048, 1024)
+    c = s.calibration
+    assert (c.fx, c.fy, c.camera_height) == pytest.approx((2262.5, 2265.3, 1.2))
+    assert c.pitch == pytest.approx(math.degrees(0.05)) and s.road_direction == pytest.approx(math.degrees(0.01))
+    # The calibration's own keys win over the file's.
+    (tmp_path / "aachen.png.yaml").write_text("cityscapes: camera.json\nground: {camera_height: 1.3, pitch: 1}\n"
+                                              "objects: []\n")
+    c = read_photo_setup(photo, 2048, 1024).calibration
+    assert (c.camera_height, c.pitch) == (1.3, 1.0)
