@@ -98,8 +98,20 @@ def contact_sheet(ds: Dataset, path: str, frames: Sequence[int], columns: int = 
             ax.add_patch(Rectangle((x - 0.5, y - 0.5), bw, bh, fill=False, edgecolor=c, linewidth=1.2))
             ax.text(x - 0.5, y - 1.0, f"{o['class']} #{o['instance_id']}", color="white", fontsize=6,
                     va="bottom", bbox={"facecolor": c, "edgecolor": "none", "pad": 0.5, "alpha": 0.85})
+        # A photo's real objects (dashed, their class) and ignore regions (grey, dotted).
+        for o in f.real_objects:
+            x0, y0, x1, y1 = o["bbox"]
+            c = _colour(o["class_id"])
+            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=c, linewidth=1.0, linestyle="--"))
+            ax.text(x0, y0 - 1.0, f"{o['class']} (real)", color="white", fontsize=5, va="bottom",
+                    bbox={"facecolor": c, "edgecolor": "none", "pad": 0.4, "alpha": 0.6})
+        for o in f.ignore_regions:
+            x0, y0, x1, y1 = o["bbox"]
+            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=True, facecolor=(0.5, 0.5, 0.5, 0.25),
+                                   edgecolor=(0.6, 0.6, 0.6), linewidth=0.8, linestyle=":"))
         tag = " (negative)" if f.meta.get("negative") else ""
-        ax.set_title(f"frame {k}: {len(f.objects)} objects{tag}", fontsize=8)
+        real = f" + {len(f.real_objects)} real" if f.real_objects else ""
+        ax.set_title(f"frame {k}: {len(f.objects)} objects{real}{tag}", fontsize=8)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=110)
