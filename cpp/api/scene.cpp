@@ -457,6 +457,7 @@ void Scene::build_render_scene() {
   rs.instances.assign(m_instances.size(), InstanceRecord{});
   m_instance_triangle_materials.assign(m_instances.size(), {});
   rs.lights.clear();
+  rs.reflection_lights.clear();
   rs.light_in_catcher_layer.clear();
   rs.infinite_lights.clear();
   rs.has_catchers = false;
@@ -575,11 +576,15 @@ void Scene::build_render_scene() {
   for (auto& e : m_lights) {
     if (!e) continue;
     e->object->preprocess(rs.bounds);
+    if (e->object->reflection_only()) {
+      rs.reflection_lights.push_back(e->object.get());
+      continue;
+    }
     if (e->object->is_infinite()) rs.infinite_lights.push_back(uint32_t(rs.lights.size()));
     rs.lights.push_back(e->object.get());
     rs.light_in_catcher_layer.push_back(1);
   }
-  rs.has_hittable_emitters = !m_area_lights.empty() || !rs.infinite_lights.empty();
+  rs.has_hittable_emitters = !m_area_lights.empty() || !rs.infinite_lights.empty() || !rs.reflection_lights.empty();
   std::vector<float> power;
   for (const Light* l : rs.lights) power.push_back(std::max(l->power(), 0.f));
   rs.light_pick = Distribution1D(power);

@@ -85,6 +85,9 @@ struct PathState {
   uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
   uint32_t bounce = 0;
   bool prev_delta = true;  ///< the camera "sampled" the first direction
+  /// Every bounce so far was a glossy or specular lobe: the camera sees a reflection (of a
+  /// reflection ...): only such paths see reflection_only lights.
+  bool all_glossy = true;
   /// Product of eta^2 over refractions: removes the 1/eta^2 radiance scaling from the
   /// Russian-roulette decision (pbrt-v4 "etaScale"), so paths inside glass are not culled.
   float eta_scale = 1.f;
@@ -155,6 +158,10 @@ class PathTracer {
       if (!st.prev_delta) w = power_heuristic(st.prev_pdf, sc.light_pick.pmf(li) * light->pdf_le(st.ray.d));
       st.L += st.beta * le * w;
     }
+    // Lights only reflections see: no MIS (never sampled), only at the end of a camera path of
+    // glossy / specular bounces (what the camera sees reflected; never light on a diffuse surface).
+    if (st.bounce > 0 && st.all_glossy)
+      for (const Light* light : sc.reflection_lights) st.L += st.beta * light->le(st.ray.d);
     st.active = false;
   }
 
@@ -251,6 +258,7 @@ class PathTracer {
     st.prev_pdf = bs.pdf;
     if (bs.flags & k_bsdf_transmission) st.eta_scale *= bs.eta * bs.eta;
     st.prev_delta = (bs.flags & k_bsdf_delta) != 0;
+    st.all_glossy = st.all_glossy && (bs.flags & (k_bsdf_delta | k_bsdf_glossy)) != 0;
     st.cone_spread += bsdf_spread_angle(bs);
     ++st.segments;
     ++st.bounce;

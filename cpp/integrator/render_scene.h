@@ -44,6 +44,9 @@ struct RenderScene {
   std::vector<char> light_in_catcher_layer;
   Distribution1D light_pick;
   std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
+  /// Infinite lights seen only by glossy / specular bounces (Light::reflection_only); not in
+  /// `lights` (never sampled).
+  std::vector<const Light*> reflection_lights;
   PinholeCamera camera;
   Bounds3 bounds;
   /// False when no ray can pick up emission by hitting something (no emissive surfaces,

@@ -103,6 +103,8 @@ class EnvMapLight final : public Light {
   float power() const override { return 4.f * k_pi * k_pi * m_radius * m_radius * m_sampler.mean(); }
   bool is_infinite() const override { return true; }
   bool visible_to_camera() const override { return m_visible; }
+  bool reflection_only() const override { return m_reflection_only; }
+  void set_reflection_only(bool r) { m_reflection_only = r; }
   Color le(const Vec3f& dir) const override { return m_pixels[m_sampler.pixel(to_map(dir))]; }
   float pdf_le(const Vec3f& dir) const override { return m_sampler.pdf(to_map(dir)); }
   void preprocess(const Bounds3& b) override { m_radius = std::max(b.radius(), 1e-3f); }
@@ -114,6 +116,7 @@ class EnvMapLight final : public Light {
   Transform m_world_from_map;
   EquirectSampler m_sampler;
   bool m_visible;
+  bool m_reflection_only = false;
   float m_radius = 1.f;
 };
 
@@ -128,7 +131,10 @@ PluginInfo info() {
       .add(param::real("strength", 1.0, "multiplies the map").at_least(0))
       .add(param::real("rotation", 0.0, "rotation in degrees about the map's up axis (right-handed)"))
       .add(param::vec3("up", Vec3f(0.f, 1.f, 0.f), "world direction of the map's top row"))
-      .add(param::boolean("visible", true, "whether camera rays see the map directly"));
+      .add(param::boolean("visible", true, "whether camera rays see the map directly"))
+      .add(param::boolean("reflection_only", false,
+                          "seen only by glossy and specular bounces (what objects reflect), never lighting the "
+                          "scene: a photo's surroundings on a dome"));
 }
 
 std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
@@ -150,7 +156,10 @@ std::shared_ptr<Light> create(const Params& params, const PluginContext&) {
                   std::to_string(i % img.width) + ", " + std::to_string(i / img.width) + ")");
     pixels[i] = vmax(c, Color(0.f)) * strength;
   }
-  return std::make_shared<EnvMapLight>(std::move(pixels), img.width, img.height, world_from_map(rotation, up), visible);
+  auto light = std::make_shared<EnvMapLight>(std::move(pixels), img.width, img.height, world_from_map(rotation, up),
+                                             visible);
+  light->set_reflection_only(params.get_bool("reflection_only"));
+  return light;
 }
 
 }  // namespace

@@ -55,6 +55,11 @@ class Light {
   /// Infinite lights: whether camera rays see le() directly (false hides an environment
   /// from the camera while it still lights the scene and shows in reflections).
   virtual bool visible_to_camera() const { return true; }
+  /// An infinite light seen only at the end of camera paths of glossy or specular bounces (what
+  /// the camera sees reflected or refracted), never lighting a diffuse surface: not sampled by
+  /// next-event estimation, not seen by camera rays. Cycles' world shaders do the like with the
+  /// "is glossy ray" light path: a photo's surroundings for what objects reflect.
+  virtual bool reflection_only() const { return false; }
   /// Called once per commit with the world bounds of the scene.
   virtual void preprocess(const Bounds3& scene_bounds) {}
 };

@@ -21,7 +21,7 @@ from ..post.photo.composite import composite
 from ..scene import primitives as P
 
 __all__ = ["PhotoPlacement", "photo_lights", "ground_albedo", "exposure_factor", "finish_photo_frame",
-           "road_yaw", "MIN_REAL_VISIBLE"]
+           "road_yaw", "MIN_REAL_VISIBLE", "photo_dome"]
 
 #: Real objects an inserted one covers more than this fraction of (by pixels) keep their label,
 #: with its visible fraction; below this visible fraction they become ignore regions.
@@ -161,6 +161,41 @@ def photo_lights(fp: FramePhoto, scenario_lights: List[Tuple[str, Dict[str, Any]
         return [("environment", {"radiance": 1.0})], {"lighting": "overcast (uniform sky), as the photo says"}
     return scenario_lights, {"lighting": "the scenario's lights (fallback: the photo gives no sun; shadows may "
                                          "contradict the photo's)", "lighting_fallback": True}
+
+
+def photo_dome(photo: np.ndarray, calibration: Any, width: int = 512) -> np.ndarray:
+    """The photo projected onto a distant dome: an equirectangular map (width x width/2, the
+    ``envmap`` convention: top row up, centre +z) whose directions the photo's camera sees hold
+    the photo's (linear) pixels, bilinearly; the others the mean of the photo's top rows (above
+    the horizon) or bottom rows (below). What inserted objects reflect (envmap reflection_only)."""
+    h = width // 2
+    v = (np.arange(h) + 0.5) / h
+    u = (np.arange(width) + 0.5) / width
+    theta, phi = np.pi * v[:, None], 2 * np.pi * u[None, :]
+    d = np.stack([np.sin(theta) * np.sin(phi), np.cos(theta) * np.ones_like(phi), -np.sin(theta) * np.cos(phi)], -1)
+    wfc = calibration.world_from_camera()
+    pc = d @ wfc[:3, :3]  # camera-space directions (rows: R^T d)
+    ph, pw = photo.shape[:2]
+    top = photo[: max(1, ph // 7)].reshape(-1, 3).mean(axis=0)
+    bottom = photo[-max(1, ph // 5):].reshape(-1, 3).mean(axis=0)
+    out = np.where((d[..., 1] >= 0)[..., None], top, bottom).astype(np.float32)
+    front = pc[..., 2] > 1e-6
+    x = np.where(front, pc[..., 0] / np.where(front, pc[..., 2], 1.0), 0.0)
+    y = np.where(front, pc[..., 1] / np.where(front, pc[..., 2], 1.0), 0.0)
+    cam = calibration.camera()
+    if any(calibration.distortion):
+        xy = np.array([cam.distort(float(a), float(b)) if f else (0.0, 0.0)
+                       for a, b, f in zip(x.ravel(), y.ravel(), front.ravel())]).reshape(h, width, 2)
+        x, y = xy[..., 0], xy[..., 1]
+    px = calibration.fx * x + calibration.cx - 0.5
+    py = calibration.fy * y + calibration.cy - 0.5
+    inside = front & (px >= 0) & (px <= pw - 1) & (py >= 0) & (py <= ph - 1)
+    x0 = np.clip(np.floor(px).astype(int), 0, pw - 2)
+    y0 = np.clip(np.floor(py).astype(int), 0, ph - 2)
+    fx, fy = np.clip(px - x0, 0, 1)[..., None], np.clip(py - y0, 0, 1)[..., None]
+    s = ((1 - fx) * (1 - fy) * photo[y0, x0] + fx * (1 - fy) * photo[y0, x0 + 1] + (1 - fx) * fy * photo[y0 + 1, x0] +
+         fx * fy * photo[y0 + 1, x0 + 1])
+    return np.where(inside[..., None], s, out).astype(np.float32)
 
 
 def ground_albedo(fp: FramePhoto, given: Optional[Sequence[float]]) -> List[float]:

@@ -114,6 +114,51 @@ class FrameRenderer:
             if g["backplate"]:
                 self.scene.set_instance_catcher(self.ground, True)
 
+    def _add_dome(self, fp: Any, camera: Any, keep: List[bool], objects: List[PlacedObject], seed: int
+                  ) -> Dict[str, Any]:
+        """Adds the photo's dome (frame.photo.photo_dome) as a reflection-only environment, in the
+        render's units: a pre-pass at a quarter of the resolution (4 spp, the objects hidden)
+        gives the exposure that maps the rendered ground to the photo's; the dome is the photo
+        divided by it. One map file per photo, kept for the worker's life."""
+        import os
+        import tempfile
+
+        from .._core import PinholeCamera
+        from ..outputs.files import write_exr
+        from .photo import exposure_factor, photo_dome
+
+        if not hasattr(self, "_dome_dir"):
+            import atexit
+            import shutil
+
+            self._dome_dir = tempfile.mkdtemp(prefix="synthgen-dome-")
+            atexit.register(shutil.rmtree, self._dome_dir, True)
+        path = os.path.join(self._dome_dir, f"dome-{fp.photo.sha256[:16]}.exr")
+        if not os.path.exists(path):
+            write_exr(path, photo_dome(fp.photo.pixels, fp.setup.calibration))
+        shown = [o.instance for o, k in zip(objects, keep) if k]
+        for i in shown:
+            self.scene.set_instance_visible(i, False)
+        w, h = camera.width, camera.height
+        q = 4
+        small = PinholeCamera(camera.fx / q, camera.fy / q, (camera.cx + 0.5) / q - 0.5, (camera.cy + 0.5) / q - 0.5,
+                              max(1, w // q), max(1, h // q), np.asarray(camera.world_from_camera, np.float64),
+                              distortion=tuple(camera.distortion))
+        self.scene.set_camera(small)
+        self.scene.commit()
+        pre = self.scene.render(spp=4, max_depth=4, seed=seed, threads=self.threads)
+        for i in shown:
+            self.scene.set_instance_visible(i, True)
+        photo_small = fp.pixels[: (h // q) * q, : (w // q) * q].reshape(h // q, q, w // q, q, 3).mean(axis=(1, 3))
+        ids = np.asarray(pre.instance_id)
+        k, where = exposure_factor(photo_small, np.asarray(pre.rgb), np.zeros(ids.shape), (ids == 0) &
+                                   np.isfinite(np.asarray(pre.depth)), [], np.zeros(ids.shape, bool))
+        strength = float(1.0 / max(float(np.mean(k)), 1e-6))
+        self.lights.append(self.scene.add_light("envmap", {"file": path, "strength": strength,
+                                                           "reflection_only": True, "visible": False}))
+        self.light_specs.append(("envmap", {"file": "photo dome", "strength": strength, "reflection_only": True}))
+        return {"strength": strength, "pre_pass_exposure": [float(v) for v in k], "from": where}
+
     def _backplate(self, res: Any, rs: Mapping[str, Any], seed: int) -> Tuple[np.ndarray, Dict[str, Any]]:
         """The frame over the environment's own image: the camera's view of the lights alone
         (every instance hidden: each ray sees the map), the ground a catcher (ratio composite)."""
@@ -185,10 +230,13 @@ class FrameRenderer:
                 self.scene.set_instance_labels(o.instance, 0, 0)
         amodal = {k: amodal_pixels(view, camera, k) for k in range(len(objects)) if keep[k] and objects[k].spec.labelled}
         view.show(keep)
-        self.scene.set_camera(camera)
-        self.scene.commit()
         rs = sc.spec["render"]
         render_seed = int(np.random.SeedSequence([sc.seed, int(frame), 3]).generate_state(1, np.uint64)[0])
+        if fp is not None and sc.spec["background"]["dome"]:
+            photo_info = dict(photo_info or {})
+            photo_info["dome"] = self._add_dome(fp, camera, keep, objects, render_seed)
+        self.scene.set_camera(camera)
+        self.scene.commit()
         res = self.scene.render(spp=rs["spp"], max_depth=rs["max_depth"], rr_depth=rs["rr_depth"], seed=render_seed,
                                 threads=self.threads)
         t_render = time.perf_counter()

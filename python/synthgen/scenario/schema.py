@@ -151,6 +151,9 @@ BACKGROUND = Record(
      "max_real_overlap": Number(0.5, min=0.0, max=1.0,
                                 doc="an inserted object and a real object (or an ignore region) may overlap by at most "
                                     "this fraction of the farther one's box (the one hidden)"),
+     "dome": Bool(True, doc="the photo projected onto a distant dome is what the objects reflect (envmap "
+                             "reflection_only: seen by glossy and specular bounces only, in the render's units by a "
+                             "low-resolution pre-pass's exposure)"),
      "match": Record({"denoise": Bool(True, doc="filter the objects' Monte Carlo noise first (joint bilateral "
                                                  "guided by their albedo and normals)"),
                       "noise": Bool(True, doc="the photo's noise (sigma^2 = a y + b, fitted in sRGB) on what the "
