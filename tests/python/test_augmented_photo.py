@@ -207,3 +207,28 @@ def test_the_light_follows_what_the_photo_says(photo_dir, tmp_path, sun, lightin
     if "shadow" in sun:
         assert f.meta["lights"][0]["type"] == "sky"
         assert 0 < f.meta["background"]["sun"]["elevation"] < 90
+
+
+def test_a_photos_hdr_is_turned_so_its_sun_matches_the_photos(tmp_path):
+    """envmap without a rotation, sun given: the map's brightest pixel lands at the sun's azimuth
+    (seen by a camera looking there, the sun is in the middle of the image)."""
+    from synthgen.frame.photo import envmap_rotation_to
+
+    path = str(tmp_path / "env.exr")
+    img = np.full((64, 128, 3), 0.2, np.float32)
+    img[20:23, 30:33] = 500.0  # the sun at map azimuth 360 * 31.5 / 128
+    _write_exr(path, img)
+    for azimuth in (40.0, 200.0, 300.0):
+        rot = envmap_rotation_to(path, azimuth)
+        s = sg.Scene()
+        b = P.box((0.1, 0.1, 0.1))
+        s.add_instance(s.add_mesh(b["positions"], b["indices"]), P.translate([0.0, -50.0, 0.0]))
+        s.add_light("envmap", {"file": path, "rotation": rot})
+        el = np.radians(90.0 * (1 - 21.5 / 32))  # the sun's row: elevation above the horizon
+        a = np.radians(azimuth)
+        d = [np.cos(el) * np.sin(a), np.sin(el), -np.cos(el) * np.cos(a)]
+        s.set_camera(sg.PinholeCamera.from_fov(20, 65, 65, sg.PinholeCamera.look_at([0, 0, 0], d)))
+        rgb = np.asarray(s.render(spp=4, texture_filtering=False).rgb)
+        ys, xs = np.nonzero(rgb.sum(axis=2) > 100.0)  # the sun's disc (3 x 3 texels: 8 degrees)
+        assert len(ys) and abs(xs.mean() - 32.5) <= 1.5 and abs(ys.mean() - 32.5) <= 1.5, (azimuth, xs.mean(),
+                                                                                            ys.mean())

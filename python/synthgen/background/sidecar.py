@@ -150,7 +150,9 @@ CALIBRATION_SCHEMA = Record(
      "occluders": String(None, doc="mask image: non-zero pixels are real things in front of every inserted "
                                    "object"),
      "envmap": Record({"file": String(doc="equirectangular HDR image of the photo's surroundings"),
-                       "rotation": Number(0.0, doc="degrees about the up axis (its sun to the given azimuth)")},
+                       "rotation": Number(None, doc="degrees about the up axis (default: the map's sun, its "
+                                                    "brightest pixel, turned to the photo's sun azimuth when "
+                                                    "given; else 0)")},
                       default=None, doc="the photo's own HDR environment"),
      "labels": ListOf(_LABELS, None, doc="files of the photo's real labels"),
      "objects": ListOf(_OBJECT, None, doc="real objects written here (boxes or polygons)"),
@@ -174,7 +176,7 @@ class PhotoSetup:
     overcast: bool = False
     depth: Optional[Dict[str, Any]] = None
     occluders: Optional[str] = None
-    envmap: Optional[Tuple[str, float]] = None
+    envmap: Optional[Tuple[str, Optional[float]]] = None
     objects: List[RealObject] = field(default_factory=list)
     labelled: bool = False
     licence: str = ""
@@ -460,7 +462,7 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
         setup.occluders = r.path("occluders", r.get("occluders"))
     if r.get("envmap") is not None:
         e = r.get("envmap")
-        setup.envmap = (r.path("envmap", e["file"], "file"), float(e["rotation"]))
+        setup.envmap = (r.path("envmap", e["file"], "file"), None if e["rotation"] is None else float(e["rotation"]))
     # -- real labels -----------------------------------------------------------------------------
     objs: List[RealObject] = []
     for i, lab in enumerate(r.get("labels") or []):

@@ -143,6 +143,22 @@ class PhotoPlacement:
         return True
 
 
+def envmap_rotation_to(path: str, azimuth: float) -> float:
+    """The ``rotation`` of an equirectangular map that puts its sun (the pixels within 10 % of
+    the brightest luminance, their circular mean) at compass ``azimuth``. NOTE: envmap's world_from_map is a right-handed turn by
+    the rotation r about +y, which takes map azimuth m to world azimuth m - r (u = m / 360 in the
+    map), so r = m - azimuth."""
+    from .._core import read_image
+
+    img = read_image(path)
+    lum = img[..., :3] @ np.array([0.2126, 0.7152, 0.0722], np.float32) if img.shape[2] >= 3 else img[..., 0]
+    # The sun's disc: pixels within 10 % of the brightest, their circular mean azimuth.
+    ys, xs = np.nonzero(lum >= 0.9 * float(lum.max()))
+    a = 2.0 * np.pi * (xs + 0.5) / lum.shape[1]
+    m = float(np.degrees(np.arctan2(np.sin(a).mean(), np.cos(a).mean()))) % 360.0
+    return float((m - azimuth) % 360.0)
+
+
 def photo_lights(fp: FramePhoto, scenario_lights: List[Tuple[str, Dict[str, Any]]]
                  ) -> Tuple[List[Tuple[str, Dict[str, Any]]], Dict[str, Any]]:
     """The lights of a photo frame and how they were chosen: the photo's HDR environment
@@ -152,7 +168,13 @@ def photo_lights(fp: FramePhoto, scenario_lights: List[Tuple[str, Dict[str, Any]
     s = fp.setup
     if s.envmap is not None:
         path, rot = s.envmap
-        return [("envmap", {"file": path, "rotation": rot})], {"lighting": "the photo's environment map"}
+        how = "the photo's environment map"
+        if rot is None:
+            rot = 0.0
+            if s.sun is not None:
+                rot = envmap_rotation_to(path, s.sun[0])
+                how += f" turned so that its sun stands at the photo's sun azimuth ({rot:.1f} degrees)"
+        return [("envmap", {"file": path, "rotation": rot})], {"lighting": how}
     if s.sun is not None:
         az, el = s.sun
         return [("sky", {"elevation": max(0.0, min(90.0, el)), "azimuth": az, "strength": 0.02})], \
