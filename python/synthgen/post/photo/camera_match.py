@@ -384,7 +384,7 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
         have = np.zeros(y.shape, np.float32)
         if synthetic is not None:
             syn = synthetic[y0:y1, x0:x1]
-            have = np.where(syn > 0.5, s_mc * s_mc, have)
+            have = np.where(syn > 0.5, var_mc[y0:y1, x0:x1], have)
             py = p_enc[y0:y1, x0:x1].mean(axis=2)
             scale = np.where(py > 1e-4, y / np.maximum(py, 1e-4), 1.0)
             have = np.where(syn > 0.5, have, (scale ** 2) * (fit["a"] * py + fit["b"]))
@@ -392,11 +392,25 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
         n = np.random.default_rng(seed).standard_normal(y.shape).astype(np.float32) * add
         return np.clip(enc + n[..., None], 0.0, 1.0)
 
-    s_mc = 0.0
+    # The render's own (residual Monte Carlo) noise, per object when the ids are known: a near,
+    # well-sampled object and a small far one differ.
+    var_mc = np.zeros((h, w), np.float32)
     if noise and synthetic is not None and synthetic.any():
-        s_mc, _ = noise_sigma(srgb(composite), synthetic > 0.99)
+        full = synthetic > 0.99
+        enc_c = srgb(composite)
+        s_mc, _ = noise_sigma(enc_c, full)
         s_mc = s_mc if math.isfinite(s_mc) else 0.0
+        var_mc[:] = s_mc * s_mc
         info["render_noise_sigma"] = s_mc
+        if ids is not None:
+            per = {}
+            for i in np.unique(ids[full]):
+                m = full & (ids == i)
+                s_i, _ = noise_sigma(enc_c, m)
+                if math.isfinite(s_i):
+                    var_mc[ids == i] = s_i * s_i
+                    per[int(i)] = s_i
+            info["render_noise_sigma_per_object"] = per
     if noise:
         info["noise"] = {"a": fit["a"], "b": fit["b"], "model": "sigma^2 = a y + b (sRGB luminance)"}
     crop = layer[y0:y1, x0:x1]
