@@ -274,15 +274,9 @@ void Scene::set_instance_catcher(uint32_t id, bool catcher) {
   m_structure_dirty = true;
 }
 
-bool Scene::instance_catcher(uint32_t id) const {
-  if (id >= m_instances.size() || !m_instances[id]) throw Error("instance " + std::to_string(id) + " does not exist");
-  return m_instances[id]->catcher;
-}
+bool Scene::instance_catcher(uint32_t id) const { return get_slot(m_instances, id, "instance").catcher; }
 
-bool Scene::instance_visible(uint32_t id) const {
-  if (id >= m_instances.size() || !m_instances[id]) throw Error("instance " + std::to_string(id) + " does not exist");
-  return m_instances[id]->visible;
-}
+bool Scene::instance_visible(uint32_t id) const { return get_slot(m_instances, id, "instance").visible; }
 
 size_t Scene::texture_count() const {
   size_t n = 0;

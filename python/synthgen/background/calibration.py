@@ -90,11 +90,13 @@ class Calibration:
         return PinholeCamera(float(self.fx), float(self.fy), float(self.cx - x0), float(self.cy - y0), int(w), int(h),
                              self.world_from_camera(), distortion=tuple(float(k) for k in self.distortion))
 
-    def scaled(self, s: float) -> "Calibration":
-        """The calibration of the photo resized by ``s`` (pixel units scale, metric ones do not).
-        NOTE: pixel centres map as (u + 0.5) s - 0.5, so the principal point shifts with them."""
-        return replace(self, width=int(round(self.width * s)), height=int(round(self.height * s)), fx=self.fx * s,
-                       fy=self.fy * s, cx=(self.cx + 0.5) * s - 0.5, cy=(self.cy + 0.5) * s - 0.5)
+    def scaled(self, s: float, sy: Optional[float] = None) -> "Calibration":
+        """The calibration of the photo resized by ``s`` (by ``s`` along x and ``sy`` along y when
+        given; pixel units scale, metric ones do not). NOTE: pixel centres map as
+        (u + 0.5) s - 0.5, so the principal point shifts with them."""
+        sy = s if sy is None else sy
+        return replace(self, width=int(round(self.width * s)), height=int(round(self.height * sy)), fx=self.fx * s,
+                       fy=self.fy * sy, cx=(self.cx + 0.5) * s - 0.5, cy=(self.cy + 0.5) * sy - 0.5)
 
     # -- geometry in the image -----------------------------------------------------------------
     def rays(self, uv: np.ndarray) -> np.ndarray:

@@ -18,7 +18,8 @@ import numpy as np
 from .._core import SynthgenError
 from .formats import MAX_CALIB_BYTES
 
-__all__ = ["RealObject", "read_labels", "LABEL_FORMATS", "polygon_mask", "box_of"]
+__all__ = ["RealObject", "read_labels", "LABEL_FORMATS", "polygon_mask", "box_mask", "object_mask", "box_of",
+           "points_in_polygons"]
 
 LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti")
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
@@ -204,6 +205,22 @@ def read_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping
     return out
 
 
+def points_in_polygons(polygons, pts: np.ndarray) -> np.ndarray:
+    """Whether each point (N x 2) lies inside one of the polygons (even-odd rule)."""
+    pts = np.asarray(pts, np.float64).reshape(-1, 2)
+    out = np.zeros(len(pts), bool)
+    for p in polygons:
+        p = np.asarray(p, np.float64)
+        inside = np.zeros(len(pts), bool)
+        for (ax, ay), (bx, by) in zip(p, np.roll(p, -1, axis=0)):
+            if ay == by:
+                continue
+            cond = (ay > pts[:, 1]) != (by > pts[:, 1])
+            inside ^= cond & (pts[:, 0] < ax + (pts[:, 1] - ay) * (bx - ax) / (by - ay))
+        out |= inside
+    return out
+
+
 def polygon_mask(polygon: np.ndarray, width: int, height: int) -> np.ndarray:
     """H x W bool: pixel centres inside the polygon (even-odd rule)."""
     p = np.asarray(polygon, np.float64)
@@ -213,14 +230,19 @@ def polygon_mask(polygon: np.ndarray, width: int, height: int) -> np.ndarray:
     if x1 <= x0 or y1 <= y0:
         return mask
     ys, xs = np.mgrid[y0:y1, x0:x1]
-    px, py = xs + 0.5, ys + 0.5
-    inside = np.zeros(px.shape, bool)
-    q = np.roll(p, -1, axis=0)
-    for (ax, ay), (bx, by) in zip(p, q):
-        if ay == by:
-            continue
-        cond = (ay > py) != (by > py)
-        xcross = ax + (py - ay) * (bx - ax) / (by - ay)
-        inside ^= cond & (px < xcross)
-    mask[y0:y1, x0:x1] = inside
+    centres = np.stack([xs.ravel() + 0.5, ys.ravel() + 0.5], 1)
+    mask[y0:y1, x0:x1] = points_in_polygons([p], centres).reshape(xs.shape)
     return mask
+
+
+def box_mask(box, width: int, height: int) -> np.ndarray:
+    """H x W bool: pixel centres inside the box [x0, y0, x1, y1]."""
+    x0, y0, x1, y1 = (int(math.floor(float(v) + 0.5)) for v in box)
+    mask = np.zeros((height, width), bool)
+    mask[max(y0, 0):max(y1, 0), max(x0, 0):max(x1, 0)] = True
+    return mask
+
+
+def object_mask(polygon, box, width: int, height: int) -> np.ndarray:
+    """A real object's pixels: its polygon's when it has one, else its box's."""
+    return polygon_mask(polygon, width, height) if polygon is not None else box_mask(box, width, height)

@@ -8,7 +8,6 @@ header only (bounded: the first 256 kB, at most 64 segments).
 from __future__ import annotations
 
 import glob
-import hashlib
 import os
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Sequence
@@ -16,9 +15,9 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 from .._core import SynthgenError, read_image_info
+from ..scene.assets import file_sha256
 
-__all__ = ["PHOTO_EXTENSIONS", "Photo", "expand_photos", "load_photo", "apply_orientation", "jpeg_quality",
-           "file_sha256"]
+__all__ = ["PHOTO_EXTENSIONS", "Photo", "expand_photos", "load_photo", "apply_orientation", "jpeg_quality"]
 
 #: Files a folder or glob of photos contributes (case-insensitive).
 PHOTO_EXTENSIONS = (".jpg", ".jpeg", ".png", ".tif", ".tiff", ".exr", ".hdr", ".bmp")
@@ -52,14 +51,6 @@ def expand_photos(entries: Sequence[str], base_dir: str) -> List[str]:
                 seen.add(f)
                 out.append(f)
     return out
-
-
-def file_sha256(path: str) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 def apply_orientation(a: np.ndarray, orientation: int) -> np.ndarray:

@@ -7,7 +7,6 @@ is known without the others, and ``max_uses`` caps the rounds.
 """
 from __future__ import annotations
 
-import math
 import os
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -17,7 +16,8 @@ import numpy as np
 
 from .._core import SynthgenError
 from .labels import RealObject
-from .photos import Photo, expand_photos, file_sha256, load_photo
+from ..scene.assets import file_sha256
+from .photos import Photo, expand_photos, load_photo
 from .sidecar import PhotoSetup, find_calibration_files, read_photo_setup
 
 __all__ = ["PhotoSet", "FramePhoto", "resize_linear", "read_depth", "nearest_crop"]
@@ -254,7 +254,7 @@ class PhotoSet:
         x0, y0 = self._crop(setup, sw, sh, w, h, rng)
         scaled = resize_linear(photo.pixels, sw, sh) if (sw, sh) != (photo.width, photo.height) else photo.pixels
         sx, sy = sw / photo.width, sh / photo.height
-        cal = setup.calibration.scaled(sx) if abs(sx - sy) < 1e-9 else _scaled_xy(setup.calibration, sx, sy)
+        cal = setup.calibration.scaled(sx, sy)
         objects = []
         for o in setup.objects:
             bx = np.array(o.box, np.float64) * [sx, sy, sx, sy] - [x0, y0, x0, y0]
@@ -281,9 +281,3 @@ class PhotoSet:
             fp.occluders = nearest_crop(m[:, :, 0] > 0.5, sw, sh, fp.crop)
         return fp
 
-
-def _scaled_xy(cal, sx: float, sy: float):
-    from dataclasses import replace
-
-    return replace(cal, width=int(round(cal.width * sx)), height=int(round(cal.height * sy)), fx=cal.fx * sx,
-                   fy=cal.fy * sy, cx=(cal.cx + 0.5) * sx - 0.5, cy=(cal.cy + 0.5) * sy - 0.5)

@@ -5,7 +5,7 @@ car, the width the calibration gives it (a real car is 1.6 to 2.0 m wide)."""
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Sequence
 
 import numpy as np
 

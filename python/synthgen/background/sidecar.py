@@ -9,7 +9,6 @@ Every problem is reported as ``file:line:column: key: reason``.
 """
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Sequence, Tuple
@@ -18,7 +17,7 @@ import numpy as np
 
 from .._core import SynthgenError
 from ..schema.errors import Loc, ValidationContext, show_value
-from ..schema.fields import (EMPTY, REQUIRED, Bool, Choice, Field, FilePath, ListOf, MapOf, Number, Record, String,
+from ..schema.fields import (REQUIRED, Bool, Choice, Field, FilePath, ListOf, MapOf, Number, Record, String,
                              Vector)
 from ..schema.yaml_io import MarkedDict, MarkedList, read_yaml
 from .calibration import (Calibration, fov_to_focal, ground_from_horizon, ground_from_plane, sun_from_shadow)

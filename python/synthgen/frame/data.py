@@ -89,16 +89,10 @@ class FrameData:
     def target_masks(self) -> np.ndarray:
         """N x H x W bool masks of :attr:`boxes_xyxy`'s objects: inserted ones exact (from
         ``instance_id``), real ones from their polygon (or box)."""
-        from ..background.labels import polygon_mask
+        from ..background.labels import object_mask
 
         h, w = (self.rgb if self.rgb is not None else self.instance_id).shape[:2]
         out = [self.mask(o["instance_id"]) for o in self.objects]
-        for o in self.real_objects:
-            if o.get("polygon"):
-                out.append(polygon_mask(np.asarray(o["polygon"], float), w, h))
-            else:
-                x0, y0, x1, y1 = o["bbox"]
-                m = np.zeros((h, w), bool)
-                m[int(np.floor(y0 + 0.5)):int(np.floor(y1 + 0.5)), int(np.floor(x0 + 0.5)):int(np.floor(x1 + 0.5))] = True
-                out.append(m)
+        out += [object_mask(None if not o.get("polygon") else np.asarray(o["polygon"], float), o["bbox"], w, h)
+                for o in self.real_objects]
         return np.stack(out) if out else np.zeros((0, h, w), bool)

@@ -15,10 +15,9 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..background.labels import RealObject, polygon_mask
-from ..background.photoset import FramePhoto, PhotoSet
+from ..background.labels import object_mask, points_in_polygons, polygon_mask
+from ..background.photoset import FramePhoto
 from ..post.photo.composite import composite
-from ..scene import primitives as P
 
 __all__ = ["PhotoPlacement", "photo_lights", "ground_albedo", "exposure_factor", "finish_photo_frame",
            "road_yaw", "MIN_REAL_VISIBLE", "photo_dome"]
@@ -32,22 +31,6 @@ def road_yaw(road_direction: float) -> float:
     """The ``yaw`` (about +y, degrees) that turns an object's forward (+x) along the road, which
     runs ``road_direction`` degrees to the right of the camera's forward (+z)."""
     return -90.0 - float(road_direction)
-
-
-def _inside(polys: Sequence[np.ndarray], pts: np.ndarray) -> np.ndarray:
-    """Whether each point lies inside one of the polygons (even-odd rule)."""
-    out = np.zeros(len(pts), bool)
-    for p in polys:
-        q = np.roll(p, -1, axis=0)
-        inside = np.zeros(len(pts), bool)
-        for (ax, ay), (bx, by) in zip(p, q):
-            if ay == by:
-                continue
-            cond = (ay > pts[:, 1]) != (by > pts[:, 1])
-            xc = ax + (pts[:, 1] - ay) * (bx - ax) / (by - ay)
-            inside ^= cond & (pts[:, 0] < xc)
-        out |= inside
-    return out
 
 
 @dataclass
@@ -97,7 +80,7 @@ class PhotoPlacement:
         cam = np.asarray(self.camera.world_from_camera, np.float64)[:3, 3]
         for _ in range(50):
             uv = np.array([[rng.uniform(x0, x1), rng.uniform(y0, y1)]])
-            if not _inside(self.polys, uv)[0]:
+            if not points_in_polygons(self.polys, uv)[0]:
                 continue
             g = self._ground(*uv[0])
             if g is None:
@@ -125,7 +108,7 @@ class PhotoPlacement:
         # The region covers the image only: corners outside the image (a truncated object) pass.
         w, h = self.camera.width, self.camera.height
         seen = (uv[:, 0] >= 0) & (uv[:, 0] <= w) & (uv[:, 1] >= 0) & (uv[:, 1] <= h)
-        if not np.all(_inside(self.polys, uv[seen])):
+        if not np.all(points_in_polygons(self.polys, uv[seen])):
             return False
         box = self.projected_box(corners_world)
         if box is None:
@@ -295,12 +278,7 @@ def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
             continue
         g = org + (-org[1] / d[1]) * d
         z = float((cfw @ np.r_[g, 1.0])[2])
-        if o.polygon is not None:
-            mask = polygon_mask(o.polygon, w, h)
-        else:
-            mask = np.zeros((h, w), bool)
-            mask[int(math.floor(y0 + 0.5)):int(math.floor(y1 + 0.5)), int(math.floor(x0 + 0.5)):int(math.floor(x1 + 0.5))] = True
-        out = np.where(mask, np.minimum(out, z), out)
+        out = np.where(object_mask(o.polygon, o.box, w, h), np.minimum(out, z), out)
     return out
 
 
@@ -383,12 +361,7 @@ def real_object_records(fp: FramePhoto, instance_id: np.ndarray, class_names: Se
     for i, o in enumerate(fp.objects):
         if not o.ignore and o.cls not in class_names:
             continue
-        if o.polygon is not None:
-            mask = polygon_mask(o.polygon, w, h)
-        else:
-            mask = np.zeros((h, w), bool)
-            x0, y0, x1, y1 = o.box
-            mask[int(math.floor(y0 + 0.5)):int(math.floor(y1 + 0.5)), int(math.floor(x0 + 0.5)):int(math.floor(x1 + 0.5))] = True
+        mask = object_mask(o.polygon, o.box, w, h)
         area = int(mask.sum())
         vis = float((mask & ~covered).sum() / area) if area else 0.0
         full = getattr(o, "full_box", list(o.box))

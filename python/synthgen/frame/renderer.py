@@ -9,6 +9,7 @@ what the worker rendered before never changes the result.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from typing import Any, Dict, List, Mapping, Optional, Set, Tuple
@@ -136,19 +137,14 @@ class FrameRenderer:
         path = os.path.join(self._dome_dir, f"dome-{fp.photo.sha256[:16]}.exr")
         if not os.path.exists(path):
             write_exr(path, photo_dome(fp.photo.pixels, fp.setup.calibration))
-        shown = [o.instance for o, k in zip(objects, keep) if k]
-        for i in shown:
-            self.scene.set_instance_visible(i, False)
         w, h = camera.width, camera.height
         q = 4
         small = PinholeCamera(camera.fx / q, camera.fy / q, (camera.cx + 0.5) / q - 0.5, (camera.cy + 0.5) / q - 0.5,
                               max(1, w // q), max(1, h // q), np.asarray(camera.world_from_camera, np.float64),
                               distortion=tuple(camera.distortion))
         self.scene.set_camera(small)
-        self.scene.commit()
-        pre = self.scene.render(spp=4, max_depth=4, seed=seed, threads=self.threads)
-        for i in shown:
-            self.scene.set_instance_visible(i, True)
+        with self._hidden(self.pool.ids + self.decor.ids):
+            pre = self.scene.render(spp=4, max_depth=4, seed=seed, threads=self.threads)
         photo_small = fp.pixels[: (h // q) * q, : (w // q) * q].reshape(h // q, q, w // q, q, 3).mean(axis=(1, 3))
         ids = np.asarray(pre.instance_id)
         k, where = exposure_factor(photo_small, np.asarray(pre.rgb), np.zeros(ids.shape), (ids == 0) &
@@ -164,21 +160,21 @@ class FrameRenderer:
         (every instance hidden: each ray sees the map), the ground a catcher (ratio composite)."""
         from ..post.photo.composite import composite
 
-        shown = [i for i in range(self.scene.instance_count()) if self._visible(i)]
+        with self._hidden(self.pool.ids + self.decor.ids + [self.ground]):
+            plate = np.array(self.scene.render(spp=rs["spp"], max_depth=1, seed=seed, threads=self.threads).rgb)
+        return composite(plate, res, "ratio"), {"backplate": "the environment's own image", "composite": "ratio"}
+
+    @contextlib.contextmanager
+    def _hidden(self, ids: List[int]):
+        """Hides the shown ones of these instances for a render, then shows them again."""
+        shown = [i for i in ids if self.scene.instance_visible(i)]
         for i in shown:
             self.scene.set_instance_visible(i, False)
         try:
-            plate = np.array(self.scene.render(spp=rs["spp"], max_depth=1, seed=seed, threads=self.threads).rgb)
+            yield
         finally:
             for i in shown:
                 self.scene.set_instance_visible(i, True)
-        return composite(plate, res, "ratio"), {"backplate": "the environment's own image", "composite": "ratio"}
-
-    def _visible(self, i: int) -> bool:
-        try:
-            return self.scene.instance_visible(i)
-        except Exception:  # removed slots
-            return False
 
     def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
         """(arrays, meta, timings) of one frame."""

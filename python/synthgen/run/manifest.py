@@ -21,6 +21,7 @@ from .._core import __version__
 from .._core import SynthgenError
 from ..outputs.files import write_json
 from ..scenario import Scenario
+from ..scene.assets import file_sha256
 from ..schema import distributions as D
 from ..schema.fields import InputPath
 
@@ -32,13 +33,6 @@ MANIFEST = "run_manifest.json"
 class ManifestMismatch(SynthgenError):
     """The output directory holds frames of another run."""
 
-
-def _sha256(path: str) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def _companions(path: str) -> List[str]:
@@ -101,7 +95,7 @@ def build_manifest(sc: Scenario) -> Dict[str, Any]:
     files: Dict[str, str] = {}
     for p in sorted(paths):
         for f in [p] + _companions(p):
-            files[f] = _sha256(f)
+            files[f] = file_sha256(f)
     if sc.spec.get("background") is not None:
         # The photos the globs and folders expand to, their calibrations and label files: adding
         # one photo to a folder changes which photo every later frame uses.
@@ -122,7 +116,7 @@ def build_manifest(sc: Scenario) -> Dict[str, Any]:
 
         for name in ("DejaVuSans-Bold", "DejaVuSans"):
             try:
-                inputs["files"][f"font {name}"] = _sha256(raster.font_path(name))
+                inputs["files"][f"font {name}"] = file_sha256(raster.font_path(name))
             except (OSError, SynthgenError):
                 pass
     blob = json.dumps(canonical, sort_keys=True, separators=(",", ":"), default=str)

@@ -53,7 +53,8 @@ def cache_dir() -> str:
     return os.environ.get("SYNTHGEN_CACHE", os.path.join(os.path.expanduser("~"), ".cache", "synthgen"))
 
 
-def _sha256(path: str) -> str:
+def file_sha256(path: str) -> str:
+    """The sha256 of a file's content (hex), read in 1 MiB blocks."""
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
@@ -137,7 +138,7 @@ def _deb_extract(package: str, workdir: str) -> str:
 def _copy_verified(src: str, dst: str, sha: str, what: str) -> None:
     if not os.path.isfile(src):
         raise AssetError(f"{what}: source file not found: {src}")
-    got = _sha256(src)
+    got = file_sha256(src)
     if got != sha:
         raise AssetError(f"{what}: checksum mismatch for {src}: expected {sha}, got {got}")
     os.makedirs(os.path.dirname(dst), exist_ok=True)
@@ -156,13 +157,13 @@ def _fetch_one(entry: Dict[str, Any], cache: str) -> str:
     for c in entry.get("companions") or []:
         rel = os.path.relpath(c["path"], os.path.dirname(entry["source"].get("path") or ""))
         files.append((c["path"], os.path.join(os.path.dirname(dst), rel), c["sha256"]))
-    if all(os.path.isfile(d) and _sha256(d) == s for _, d, s in files):
+    if all(os.path.isfile(d) and file_sha256(d) == s for _, d, s in files):
         return dst
     src = entry["source"]
     what = f"asset '{entry['id']}'"
     if "deb" in src:
         # Installed on this system with the right content: no download needed.
-        if all(os.path.isfile(p) and _sha256(p) == s for p, _, s in files):
+        if all(os.path.isfile(p) and file_sha256(p) == s for p, _, s in files):
             for p, d, s in files:
                 _copy_verified(p, d, s, what)
             return dst
