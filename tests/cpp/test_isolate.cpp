@@ -69,6 +69,24 @@ std::string png_chunk(const std::string& type, const std::string& data) {
   return be32(uint32_t(data.size())) + type + data + be32(crc32(type + data));
 }
 
+/// A PNG with header chunk data `ihdr` and the image data of a 2 x 1 8-bit RGB image: pixels
+/// (255, 0, 0) and (128, 128, 128); the zlib stream is one stored block (filter byte 0 + 6 bytes)
+/// with its Adler-32.
+std::string png_with_header(const std::string& ihdr) {
+  std::string raw = std::string("\x00\xff\x00\x00\x80\x80\x80", 7);
+  uint32_t a = 1, b = 0;
+  for (unsigned char ch : raw) {
+    a = (a + ch) % 65521;
+    b = (b + a) % 65521;
+  }
+  std::string z = std::string("\x78\x01\x01", 3) + char(raw.size()) + char(0) + char(~raw.size()) + char(0xff) + raw +
+                  be32((b << 16) | a);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", z) +
+         png_chunk("IEND", "");
+}
+
+std::string two_pixel_png() { return png_with_header(be32(2) + be32(1) + std::string("\x08\x02\x00\x00\x00", 5)); }
+
 }  // namespace
 
 TEST(isolate, writer_and_reader_round_trip) {
@@ -130,19 +148,7 @@ TEST(isolate, a_hang_is_an_error_within_the_limit) {
 
 TEST(isolate, reader_loads_in_another_process) {
   // A 2 x 1 8-bit PNG: the reader decodes it (sRGB to linear) and sends the pixels back.
-  std::string ihdr = be32(2) + be32(1) + std::string("\x08\x02\x00\x00\x00", 5);
-  // zlib stream, stored block: filter byte 0 + 6 bytes of RGB.
-  std::string raw = std::string("\x00\xff\x00\x00\x80\x80\x80", 7);
-  uint32_t a = 1, b = 0;
-  for (unsigned char ch : raw) {
-    a = (a + ch) % 65521;
-    b = (b + a) % 65521;
-  }
-  std::string z = std::string("\x78\x01\x01", 3) + char(raw.size()) + char(0) + char(~raw.size()) + char(0xff) + raw +
-                  be32((b << 16) | a);
-  std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", z) +
-                    png_chunk("IEND", "");
-  std::string path = temp_file("two.png", png);
+  std::string path = temp_file("two.png", two_pixel_png());
   ImageData img = load_image(path, ColorSpace::Auto);
   ASSERT_EQ(img.width, 2);
   ASSERT_EQ(img.height, 1);
@@ -154,9 +160,7 @@ TEST(isolate, reader_loads_in_another_process) {
 #if !defined(__SANITIZE_ADDRESS__)
   // The same header claiming 16000 x 16000 pixels: the reader's address-space limit turns the
   // allocation into an error, not the parent's.
-  std::string big = std::string("\x89PNG\r\n\x1a\n", 8) +
-                    png_chunk("IHDR", be32(16000) + be32(16000) + std::string("\x08\x06\x00\x00\x00", 5)) +
-                    png_chunk("IDAT", z) + png_chunk("IEND", "");
+  std::string big = png_with_header(be32(16000) + be32(16000) + std::string("\x08\x06\x00\x00\x00", 5));
   std::string big_path = temp_file("big.png", big);
   IsolationLimits lim;
   lim.memory_bytes = uint64_t(512) << 20;
@@ -249,17 +253,7 @@ std::vector<pid_t> reader_children() {
 
 TEST(isolate, readers_are_reused_and_replaced_when_gone) {
   // Image readers are kept (starting one loads OpenImageIO); model readers are not.
-  std::string ihdr = be32(2) + be32(1) + std::string("\x08\x02\x00\x00\x00", 5);
-  std::string raw = std::string("\x00\xff\x00\x00\x80\x80\x80", 7);
-  uint32_t a = 1, b = 0;
-  for (unsigned char ch : raw) {
-    a = (a + ch) % 65521;
-    b = (b + a) % 65521;
-  }
-  std::string z = std::string("\x78\x01\x01", 3) + char(raw.size()) + char(0) + char(~raw.size()) + char(0xff) + raw +
-                  be32((b << 16) | a);
-  std::string png = temp_file("reuse.png", std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) +
-                                               png_chunk("IDAT", z) + png_chunk("IEND", ""));
+  std::string png = temp_file("reuse.png", two_pixel_png());
   std::vector<pid_t> before = reader_children();
   load_image(png, ColorSpace::Auto);
   std::vector<pid_t> first = reader_children();
