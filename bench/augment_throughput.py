@@ -31,23 +31,7 @@ import numpy as np  # noqa: E402
 
 from synthgen import read_dataset  # noqa: E402
 from synthgen.cli import main as cli  # noqa: E402
-from synthgen.post.photo.camera_match import ring_statistics, srgb  # noqa: E402
-
-
-def _flat(f, instance_id: int) -> np.ndarray:
-    """The object's pixels where its albedo and normal do not change (3 x 3): where the image
-    should be flat, so what varies there is noise, not texture or shape (the photo's noise is
-    measured the same way: robustly, over flat regions)."""
-    m = f.mask(instance_id)
-    flat = m.copy()
-    for a, tol in ((f.albedo, 0.01), (f.normal, 0.02)):
-        if a is None:
-            continue
-        for dy in (-1, 0, 1):
-            for dx in (-1, 0, 1):
-                b = np.roll(a, (dy, dx), axis=(0, 1))
-                flat &= np.roll(m, (dy, dx), axis=(0, 1)) & (np.abs(b - a).max(axis=2) < tol)
-    return flat if flat.sum() >= 50 else m
+from synthgen.post.photo.measure import flat_mask, ring_statistics, srgb  # noqa: E402
 
 
 def main(argv=None) -> int:
@@ -81,7 +65,7 @@ def main(argv=None) -> int:
                 x, y, w, h = o["bbox"]
                 if o["visible_pixels"] < 400:
                     continue
-                st = ring_statistics(img, _flat(f, o["instance_id"]), (x, y, x + w, y + h), cm["noise"])
+                st = ring_statistics(img, flat_mask(f.mask(o["instance_id"]), f.albedo, f.normal), (x, y, x + w, y + h), cm["noise"])
                 r_sharp = st["ring_sharpness"] / cm["photo_sharpness"]
                 if np.isfinite(st["noise_ratio"]):
                     noise.append(st["noise_ratio"])
@@ -90,9 +74,12 @@ def main(argv=None) -> int:
                 print(f"  frame {f.index} object {o['instance_id']} ({o['class']}, {o['visible_pixels']} px): noise "
                       f"{st['noise']:.4f} vs photo {st['photo_noise']:.4f} (ratio {st['noise_ratio']:.2f}); ring "
                       f"sharpness {st['ring_sharpness']:.3f} vs photo {cm['photo_sharpness']:.3f} (ratio "
-                      f"{r_sharp:.2f}); blur {cm.get('blur_sigma_px', 0):.2f} px, JPEG q {cm.get('jpeg_quality')}")
-        print(f"ring noise ratio (object / photo): median {np.median(noise):.3f} over {len(noise)} objects; "
-              f"ring sharpness ratio: median {np.median(sharp):.3f} over {len(sharp)} objects")
+                      f"{r_sharp:.2f}); blur {cm.get('blur_per_object', {}).get(str(o['instance_id']), 0.0):.2f} px "
+                      f"(< 0: sharpened), JPEG q {cm.get('jpeg_quality', 0):.0f}")
+        noise, sharp = np.array(noise), np.array(sharp)
+        print(f"ring noise ratio (object / photo): median {np.median(noise):.3f} over {len(noise)} objects, "
+              f"{int((np.abs(noise - 1) <= 0.2).sum())} within 20%; ring sharpness ratio: median "
+              f"{np.median(sharp):.3f} over {len(sharp)} objects, {int((np.abs(sharp - 1) <= 0.2).sum())} within 20%")
         print(f"augmented_frames_per_second={args.frames / wall:.4f}")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
