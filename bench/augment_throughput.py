@@ -12,7 +12,7 @@ the ring (the object's edges and the photo around) against the
 photo's; medians over the objects. The last line is exactly
 ``augmented_frames_per_second=<float>``.
 
-    .venv/bin/python bench/augment_throughput.py [--frames 8]
+    .venv/bin/python bench/augment_throughput.py [--frames 8] [--set KEY=VALUE ...]
 """
 from __future__ import annotations
 
@@ -38,6 +38,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--frames", type=int, default=8, help="frames (default 8)")
     ap.add_argument("--scenario", default=os.path.join(REPO, "scenarios", "augmented_road.yaml"))
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a scenario override passed to synthgen run (e.g. to switch wear off and see "
+                         "what dirt's texture does to the noise measure)")
     args = ap.parse_args(argv)
     tmp = tempfile.mkdtemp(prefix="synthgen-augment-")
     try:
@@ -46,7 +49,8 @@ def main(argv=None) -> int:
         assert cli(["validate", args.scenario]) == 0
         t0 = time.perf_counter()
         rc = cli(["run", args.scenario, "-o", out, "-n", str(args.frames), "--workers", "1", "--no-progress",
-                  "--set", "outputs=[rgb, depth, instance, semantic, coco, yolo, kitti, albedo, normal]"])
+                  "--set", "outputs=[rgb, depth, instance, semantic, coco, yolo, kitti, albedo, normal]"] +
+                 [a for kv in args.set for a in ("--set", kv)])
         wall = time.perf_counter() - t0
         if rc != 0:
             print(f"synthgen run failed (exit status {rc})")
