@@ -246,9 +246,20 @@ a BVH build). render() commits pending edits first.)doc")
              d["material_ids"] = py::array_t<int32_t>(py::ssize_t(m.material_ids.size()), m.material_ids.data());
              d["has_normals"] = !m.normals.empty();
              d["has_uvs"] = !m.uvs.empty();
+             if (!m.normals.empty()) {
+               py::array_t<float> n({py::ssize_t(m.normals.size()), py::ssize_t(3)});
+               std::memcpy(n.mutable_data(), m.normals.data(), m.normals.size() * sizeof(Vec3f));
+               d["normals"] = n;
+             }
+             if (!m.uvs.empty()) {
+               py::array_t<float> t({py::ssize_t(m.uvs.size()), py::ssize_t(2)});
+               std::memcpy(t.mutable_data(), m.uvs.data(), m.uvs.size() * sizeof(Vec2f));
+               d["uvs"] = t;
+             }
              return d;
            },
-           py::arg("mesh_id"), "Copies of a mesh's positions, indices and material ids.")
+           py::arg("mesh_id"),
+           "Copies of a mesh's positions, indices and material ids (and its normals and uvs when it has them).")
       .def("load_mesh_file",
            [](Scene& s, const std::string& path) {
              ImportResult r = s.load_mesh_file(path);

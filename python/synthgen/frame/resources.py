@@ -63,11 +63,21 @@ class Shapes:
                 unit = float(entry.get("scale", 1.0))
                 axes = {k: entry[k] for k in ("forward", "up") if k in entry}
             r = scene.load_mesh_file(path)
-            arrays = scene.mesh_arrays(r["mesh_id"])
+            mesh_id = r["mesh_id"]
+            arrays = scene.mesh_arrays(mesh_id)
+            if kind == "asset" and "wheels" in entry:
+                # A body whose wheels the library entry describes: one mesh with them.
+                from ..scene.vehicles import build_vehicle
+
+                tyre = scene.add_material("coated", {"albedo": 0.025, "roughness": 0.75, "specular": 0.4})
+                rim = scene.add_material("conductor", {"metal": "aluminium", "roughness": 0.3})
+                arrays = build_vehicle(scene, arrays, entry, unit, tyre, rim)
+                mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays["normals"],
+                                         uvs=arrays["uvs"], material_ids=arrays["material_ids"], name=value)
             pos = np.asarray(arrays["positions"], np.float64)
             ids = np.asarray(arrays["material_ids"], np.int64)
             distinct = tuple(int(i) for i in np.unique(ids)) if ids.size else (-1,)
-            return Shape(r["mesh_id"], pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
+            return Shape(mesh_id, pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
         if kind == "primitive":
             # Unit shapes (1 m across, centred), sized per object by scaling.
             m = {"box": lambda: P.box((1.0, 1.0, 1.0)), "sphere": lambda: P.uv_sphere(0.5, 48, 24),

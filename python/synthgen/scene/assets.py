@@ -3,7 +3,10 @@
 Each manifest entry has ``id``, ``kind`` (mesh, hdr, texture, photo, svg, image, data),
 ``licence``, ``sha256``, a ``source`` and optionally ``class`` (a class name for meshes),
 ``scale`` (factor to metres), ``description`` and ``companions`` (files that must sit next
-to the main one, e.g. an OBJ's MTL, each with ``path`` and ``sha256``). Sources:
+to the main one, e.g. an OBJ's MTL, each with ``path`` and ``sha256``); vehicles also
+``ride_height`` and ``wheels`` (built by :mod:`synthgen.scene.vehicles` for bodies that come
+without them), and ``optional: true`` marks a large asset that tests use only when it is
+already in the cache. Sources:
 
 * ``{path: P}``: a local file (relative paths are relative to the repository root);
 * ``{deb: PACKAGE, path: P}``: a file of a Debian package, taken from the installed system
@@ -79,7 +82,7 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if not isinstance(e, dict):
                 raise AssetError(f"{where}: expected a mapping")
             allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions",
-                       "forward", "up"}
+                       "forward", "up", "optional", "ride_height", "wheels"}
             for k in e:
                 if k not in allowed:
                     m = difflib.get_close_matches(str(k), allowed, n=1)
@@ -101,10 +104,37 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                     raise AssetError(f"{where} ({e['id']}): {k} must be one of {', '.join(AXES)}, got {e[k]!r}")
             if "forward" in e and "up" in e and e["forward"][1] == e["up"][1]:
                 raise AssetError(f"{where} ({e['id']}): forward and up must be different axes")
+            if "wheels" in e:
+                _check_wheels(e["wheels"], f"{where} ({e['id']}): wheels")
             if e["id"] in out:
                 raise AssetError(f"{where}: duplicate id '{e['id']}'")
             out[e["id"]] = dict(e, manifest=path)
     return out
+
+
+def _check_wheels(w: Any, where: str) -> None:
+    """A vehicle's wheels: axles (positions along forward, m), track (m, one or per axle), radius,
+    width and optionally rim_radius (m), all positive but the axles."""
+    if not isinstance(w, dict):
+        raise AssetError(f"{where}: expected a mapping")
+    for k in w:
+        if k not in ("axles", "track", "radius", "width", "rim_radius"):
+            m = difflib.get_close_matches(str(k), ["axles", "track", "radius", "width", "rim_radius"], n=1)
+            raise AssetError(f"{where}: unknown key '{k}'" + (f" (did you mean '{m[0]}'?)" if m else ""))
+    for k in ("axles", "track", "radius", "width"):
+        if k not in w:
+            raise AssetError(f"{where}: missing key '{k}'")
+    axles = w["axles"]
+    if not (isinstance(axles, list) and axles and all(isinstance(a, (int, float)) for a in axles)):
+        raise AssetError(f"{where}.axles: expected a list of numbers (metres along forward)")
+    track = w["track"] if isinstance(w["track"], list) else [w["track"]]
+    if len(track) not in (1, len(axles)) or not all(isinstance(t, (int, float)) and t > 0 for t in track):
+        raise AssetError(f"{where}.track: expected a positive number or one per axle")
+    for k in ("radius", "width", "rim_radius"):
+        if k in w and not (isinstance(w[k], (int, float)) and w[k] > 0):
+            raise AssetError(f"{where}.{k}: expected a positive number (metres)")
+    if w.get("rim_radius", 0) >= w["radius"]:
+        raise AssetError(f"{where}.rim_radius: must be less than radius")
 
 
 def _lookup(manifest: Dict[str, Dict[str, Any]], asset_id: str) -> Dict[str, Any]:
@@ -133,6 +163,21 @@ def _deb_extract(package: str, workdir: str) -> str:
     root = os.path.join(workdir, "root")
     subprocess.run(["dpkg", "-x", debs[0], root], check=True, capture_output=True)
     return root
+
+
+_DEB_ROOTS: Dict[str, Any] = {}
+
+
+def _deb_root(package: str) -> str:
+    """A package extracted once per process (several assets of one big package, e.g. the
+    vehicles of torcs-data, 333 MB, are not downloaded once each); removed at exit."""
+    if package not in _DEB_ROOTS:
+        import atexit
+
+        tmp = tempfile.TemporaryDirectory(prefix="synthgen-deb-")
+        atexit.register(tmp.cleanup)
+        _DEB_ROOTS[package] = (tmp, _deb_extract(package, tmp.name))
+    return _DEB_ROOTS[package][1]
 
 
 def _copy_verified(src: str, dst: str, sha: str, what: str) -> None:
@@ -167,10 +212,9 @@ def _fetch_one(entry: Dict[str, Any], cache: str) -> str:
             for p, d, s in files:
                 _copy_verified(p, d, s, what)
             return dst
-        with tempfile.TemporaryDirectory(prefix="synthgen-deb-") as tmp:
-            root = _deb_extract(src["deb"], tmp)
-            for p, d, s in files:
-                _copy_verified(os.path.join(root, p.lstrip("/")), d, s, what)
+        root = _deb_root(src["deb"])
+        for p, d, s in files:
+            _copy_verified(os.path.join(root, p.lstrip("/")), d, s, what)
         return dst
     if "url" in src:
         with tempfile.TemporaryDirectory(prefix="synthgen-url-") as tmp:

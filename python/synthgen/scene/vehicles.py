@@ -1,0 +1,180 @@
+"""Vehicles of the asset library: a model's body standing on its wheels, at real scale.
+
+Some models ship a body only and leave the wheels to the program that drives them (TORCS
+draws tyres and rims from the car's axle, track and tyre parameters). A library entry with a
+``wheels`` block gets them built here: each wheel a surface of revolution (tyre with rounded
+shoulders, a dished metal rim), the body lifted by its ``ride_height``, all in one mesh with the
+body's own materials plus a rubber and a rim material, so that the vehicle is one object (one
+instance id, one box). The entry's keys (lengths in metres, along the model's own ``forward``,
+``up`` and their cross product, the right):
+
+``ride_height``
+    the body's lowest point above the ground;
+``wheels``
+    ``axles`` (positions along forward), ``track`` (the distance between a pair's centres: one
+    value, or one per axle), ``radius``, ``width``, ``rim_radius`` (optional, default 0.62
+    radius).
+
+Models whose faces carry no normals get smooth ones within a crease angle (AC3D's convention).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Dict, Mapping, Sequence, Tuple
+
+import numpy as np
+
+__all__ = ["AXES", "model_axes", "revolve", "wheel_mesh", "crease_normals", "build_vehicle"]
+
+AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+
+
+def model_axes(forward: str = "+x", up: str = "+y") -> np.ndarray:
+    """Rows: the model's forward, up and right (forward x up) unit vectors in its own coordinates."""
+    f, u = np.array(AXES[forward], float), np.array(AXES[up], float)
+    if abs(float(f @ u)) > 0.5:
+        raise ValueError(f"forward {forward} and up {up} must be perpendicular")
+    return np.stack([f, u, np.cross(f, u)])
+
+
+def revolve(profile: Sequence[Tuple[float, float]], segments: int = 40) -> Dict[str, np.ndarray]:
+    """A surface of revolution about the a axis of a profile of (r, a) points (in order along the
+    surface; an r of 0 closes it at the axis). Vertices per profile point and angle; normals from
+    the profile's tangent (so that the shoulders are smooth and the flanks flat)."""
+    prof = np.asarray(profile, np.float64)
+    n = len(prof)
+    # Tangent per profile point (central differences), normal = tangent turned by -90 degrees in
+    # the (r, a) plane: outward for a profile that runs with the surface on its left.
+    t = np.gradient(prof, axis=0)
+    t /= np.maximum(np.linalg.norm(t, axis=1, keepdims=True), 1e-12)
+    nr, na = t[:, 1], -t[:, 0]
+    ang = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
+    c, s = np.cos(ang), np.sin(ang)
+    # Coordinates: (radial x, radial y, axial a) -> (x, y, a).
+    pos = np.stack([prof[:, 0][:, None] * c[None, :], prof[:, 0][:, None] * s[None, :],
+                    np.repeat(prof[:, 1][:, None], segments, 1)], -1).reshape(-1, 3)
+    nrm = np.stack([nr[:, None] * c[None, :], nr[:, None] * s[None, :], np.repeat(na[:, None], segments, 1)],
+                   -1).reshape(-1, 3)
+    idx = []
+    for i in range(n - 1):
+        for j in range(segments):
+            a, b = i * segments + j, i * segments + (j + 1) % segments
+            cc, d = a + segments, b + segments
+            if prof[i, 0] > 0:
+                idx.append((a, cc, b))
+            if prof[i + 1, 0] > 0:
+                idx.append((b, cc, d))
+    return {"positions": pos.astype(np.float32), "normals": nrm.astype(np.float32),
+            "indices": np.asarray(idx, np.uint32)}
+
+
+def wheel_mesh(radius: float, width: float, rim_radius: float, segments: int = 40
+               ) -> Tuple[Dict[str, np.ndarray], np.ndarray]:
+    """A wheel about the z axis, centred at the origin: (mesh, part per triangle: 0 tyre, 1 rim).
+
+    The tyre: tread, rounded shoulders (radius a fifth of the width), flat sidewalls down to the
+    rim; the rim: a dished face on each side, its centre set in by a fifth of the width."""
+    h = 0.5 * width
+    sh = min(0.2 * width, 0.5 * (radius - rim_radius))
+    k = [0.0, 0.38, 0.71, 0.92, 1.0]  # quarter circle, 5 points
+    tyre = [(rim_radius, -0.92 * h)]
+    tyre += [(radius - sh + sh * math.sin(q * math.pi / 2), -h + sh - sh * math.cos(q * math.pi / 2)) for q in k]
+    tyre += [(radius - sh + sh * math.cos(q * math.pi / 2), h - sh + sh * math.sin(q * math.pi / 2)) for q in k]
+    tyre += [(rim_radius, 0.92 * h)]
+    # The rim on the +a side (outer), from the tyre's bead inwards, and its mirror.
+    rim_o = [(rim_radius, 0.92 * h), (0.93 * rim_radius, 0.8 * h), (0.55 * rim_radius, 0.45 * h),
+             (0.2 * rim_radius, 0.6 * h), (0.0, 0.6 * h)]
+    rim_i = [(0.0, -0.6 * h), (0.2 * rim_radius, -0.6 * h), (0.55 * rim_radius, -0.45 * h),
+             (0.93 * rim_radius, -0.8 * h), (rim_radius, -0.92 * h)]
+    parts = [(revolve(tyre, segments), 0), (revolve(rim_o, segments), 1), (revolve(rim_i, segments), 1)]
+    pos, nrm, idx, part = [], [], [], []
+    base = 0
+    for m, p in parts:
+        pos.append(m["positions"])
+        nrm.append(m["normals"])
+        idx.append(m["indices"] + base)
+        part.append(np.full(len(m["indices"]), p, np.int32))
+        base += len(m["positions"])
+    return ({"positions": np.concatenate(pos), "normals": np.concatenate(nrm), "indices": np.concatenate(idx)},
+            np.concatenate(part))
+
+
+def crease_normals(positions: np.ndarray, indices: np.ndarray, crease_deg: float = 50.0
+                   ) -> Tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Smooth vertex normals that keep edges sharper than ``crease_deg``: each triangle corner
+    averages the (area-weighted) normals of the triangles at its vertex within the crease angle
+    of its own; corners of one vertex with the same normal share a vertex. Returns (new vertex
+    index per corner, T x 3; the original vertex of each new vertex; normals per new vertex)."""
+    p = np.asarray(positions, np.float64)
+    tri = np.asarray(indices, np.int64)
+    fn = np.cross(p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]])  # area-weighted
+    unit = fn / np.maximum(np.linalg.norm(fn, axis=1, keepdims=True), 1e-30)
+    cos_c = math.cos(math.radians(crease_deg))
+    corners = tri.ravel()
+    order = np.argsort(corners, kind="stable")
+    starts = np.searchsorted(corners[order], np.arange(len(p) + 1))
+    corner_n = np.zeros((len(corners), 3))
+    for v in range(len(p)):
+        cs = order[starts[v]:starts[v + 1]]
+        if len(cs) == 0:
+            continue
+        faces = cs // 3
+        u = unit[faces]
+        close = (u @ u.T) >= cos_c  # corner i takes face j when within the crease
+        corner_n[cs] = close.astype(np.float64) @ fn[faces]
+    corner_n /= np.maximum(np.linalg.norm(corner_n, axis=1, keepdims=True), 1e-30)
+    # Weld corners of one vertex whose normals agree.
+    key = np.concatenate([corners[:, None].astype(np.float64), np.round(corner_n, 4)], 1)
+    uniq, inverse = np.unique(key, axis=0, return_inverse=True)
+    return inverse.reshape(-1, 3), uniq[:, 0].astype(np.int64), uniq[:, 1:].astype(np.float32)
+
+
+def build_vehicle(scene: Any, body: Mapping[str, Any], entry: Mapping[str, Any], unit: float,
+                  tyre_material: int, rim_material: int) -> Dict[str, np.ndarray]:
+    """The arrays of a vehicle mesh (positions, indices, normals, uvs or None, material_ids) in the
+    model's units: ``body`` (:meth:`Scene.mesh_arrays` of the imported model) lifted by the entry's
+    ride height, its four (or more) wheels added. ``unit``: metres per model unit."""
+    axes = model_axes(entry.get("forward", "+x"), entry.get("up", "+y"))
+    fwd, up, right = axes
+    pos = np.asarray(body["positions"], np.float64)
+    tri = np.asarray(body["indices"], np.int64)
+    mids = np.asarray(body["material_ids"], np.int32)
+    if mids.size == 0:
+        mids = np.full(len(tri), -1, np.int32)
+    uvs = body.get("uvs")
+    if body.get("normals") is not None:
+        nrm = np.asarray(body["normals"], np.float32)
+    else:
+        corner, src, nrm = crease_normals(pos, tri)
+        pos, tri = pos[src], corner
+        uvs = None if uvs is None else np.asarray(uvs)[src]
+    # The body's lowest point goes to the ride height (in model units along up).
+    lift = float(entry.get("ride_height", 0.0)) / unit - float((pos @ up).min())
+    pos = pos + lift * up
+    w = entry["wheels"]
+    radius, width = float(w["radius"]), float(w["width"])
+    rim = float(w.get("rim_radius", 0.62 * radius))
+    axles = [float(a) for a in w["axles"]]
+    track = w["track"] if isinstance(w["track"], (list, tuple)) else [w["track"]] * len(axles)
+    wheel, part = wheel_mesh(radius / unit, width / unit, rim / unit)
+    # Wheel frame: its axis (z) along the model's right, its radial plane spanned by forward, up.
+    frame = np.stack([fwd, up, right])  # rows: where the wheel's x, y, z go
+    P, N, T, M, U = [pos], [nrm], [tri], [mids], [uvs]
+    base = len(pos)
+    for a, tr in zip(axles, track):
+        for side in (-1.0, 1.0):
+            centre = (a * fwd + radius * up + side * 0.5 * float(tr) * right) / unit
+            # Outer face outwards: mirror the wheel's axis on the left side.
+            fr = frame.copy()
+            fr[2] = side * right
+            fr[0] = side * fwd  # keep the frame right-handed (a mirror would flip the triangles)
+            P.append(wheel["positions"].astype(np.float64) @ fr + centre)
+            N.append((wheel["normals"] @ fr).astype(np.float32))
+            T.append(wheel["indices"].astype(np.int64) + base)
+            M.append(np.where(part == 0, tyre_material, rim_material).astype(np.int32))
+            U.append(None if uvs is None else np.zeros((len(wheel["positions"]), 2), np.float32))
+            base += len(wheel["positions"])
+    return {"positions": np.concatenate(P).astype(np.float32), "indices": np.concatenate(T).astype(np.uint32),
+            "normals": np.concatenate(N).astype(np.float32),
+            "uvs": None if uvs is None else np.concatenate(U).astype(np.float32),
+            "material_ids": np.concatenate(M).astype(np.int32)}
