@@ -9,7 +9,7 @@ APT_PACKAGES := cmake g++ make pkg-config libembree-dev libopenimageio-dev pytho
   libpugixml-dev libeigen3-dev pybind11-dev libassimp-dev libtbb-dev libgtest-dev \
   python3-dev python3-venv python3-pip python3-setuptools python3-wheel python3-numpy \
   python3-yaml python3-pytest python3-tqdm python3-distributed python3-matplotlib assimp-testmodels blender-data \
-  fonts-dejavu-core
+  fonts-dejavu-core tesseract-ocr
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: demo test build deps venv install clean cpp-test py-test

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from synthgen.scene import plates, raster, signs
+from synthgen.scene import plates, signs
 
 
 @pytest.mark.parametrize("country", ["ru", "de"])
@@ -34,33 +34,15 @@ def test_invalid_registrations_are_rejected(country, text):
 
 
 def _read_back(p) -> str:
-    """Template OCR: each character box of the rendered plate is compared with every
-    candidate glyph rendered alone at the same box size; the best match is the character
-    read. Verifies that what is drawn at each recorded position is the recorded text."""
-    img = p["rgb"]
-    dark = img.mean(axis=-1) < 0.3
-    font = raster.font_path("DejaVuSansCondensed-Bold")
-    alphabet = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ"
-    templates = {}
-    for ch in alphabet:
-        m = raster.text_mask(200, 200, ch, 20, 170, 150, font) > 0.5
-        rows, cols = np.nonzero(m)
-        templates[ch] = m[rows.min():rows.max() + 1, cols.min():cols.max() + 1]
-    out = []
-    for c in p["characters"]:
-        x0, y0, x1, y1 = c["bbox"]
-        crop = dark[y0:y1, x0:x1]
-        best, best_iou = None, -1.0
-        for ch, t in templates.items():
-            yi = (np.arange(crop.shape[0]) * t.shape[0] / crop.shape[0]).astype(int)
-            xi = (np.arange(crop.shape[1]) * t.shape[1] / crop.shape[1]).astype(int)
-            tt = t[yi][:, xi]
-            iou = (tt & crop).sum() / max(1, (tt | crop).sum())
-            if iou > best_iou:
-                best, best_iou = ch, iou
-        assert best_iou > 0.75, f"character box {c} does not hold a clean glyph (IoU {best_iou:.2f})"
-        out.append(best)
-    return "".join(out)
+    """The plate's text read by an OCR engine that was not written from our glyph code
+    (tesseract), field by field as an ANPR reader does (tests/python/plate_ocr.py)."""
+    import plate_ocr
+
+    if not plate_ocr.available():
+        pytest.skip("tesseract-ocr is not installed (make deps installs it)")
+    h, w = p["rgb"].shape[:2]
+    return plate_ocr.read_plate(plate_ocr.srgb_gray(p["rgb"]), np.array([[0, 0], [w, 0], [w, h], [0, h]], float),
+                                p["country"])
 
 
 @pytest.mark.parametrize("country", ["ru", "de"])
@@ -78,7 +60,15 @@ def test_plate_text_metadata_equals_what_is_drawn(country):
         # Reading order, left to right, boxes not overlapping (the Russian region code sits in
         # its own field on the right).
         assert all(b[2] <= a[0] for b, a in zip(boxes, boxes[1:])), boxes
-        assert _read_back(p) == expect, r["text"]
+        assert _read_back(p).replace("O", "0") == expect.replace("O", "0"), r["text"]
+        # Each box holds its whole character and nothing of its neighbours': no ink on the ring
+        # of pixels just outside it.
+        ink = p["ink"] > 0.5
+        for x0, y0, x1, y1 in boxes:
+            ring = np.zeros(ink.shape, bool)
+            ring[y0 - 1:y1 + 1, x0 - 1:x1 + 1] = True
+            ring[y0:y1, x0:x1] = False
+            assert not (ink & ring).any(), (x0, y0, x1, y1)
         n = p["normal"]
         assert n.shape == p["rgb"].shape and np.all(n[..., 2] > 0.5), "normals point out of the plate"
         assert np.abs(n[..., :2] - 0.5).max() > 0.05, "the embossing tilts normals at character edges"
@@ -121,3 +111,41 @@ def test_pictogram_files_are_linear_and_read_in_isolation(tmp_path):
         signs.load_pictogram(str(bad), "x")
     with pytest.raises(sg.SynthgenError, match="color_space must be"):
         sg.read_image(path, "rgb")
+
+
+def _erode(m: np.ndarray, r: float) -> np.ndarray:
+    """``m`` eroded by a disc of radius ``r`` pixels."""
+    out = m.copy()
+    R = int(np.ceil(r))
+    p = np.pad(m, R)
+    for dy in range(-R, R + 1):
+        for dx in range(-R, R + 1):
+            if dx * dx + dy * dy <= r * r:
+                out &= p[R + dy:R + dy + m.shape[0], R + dx:R + dx + m.shape[1]]
+    return out
+
+
+@pytest.mark.parametrize("country", ["ru", "de"])
+def test_plate_characters_have_the_standards_heights_and_strokes(country):
+    """GOST R 50577-93: digits 76 mm high, letters and the region code 58 mm, strokes at least
+    11 and 9 mm; FE-Schrift: 75 mm, strokes 10 mm. Measured on the texture: each character box's
+    height; the stroke by erosion: a disc a little under the stroke's width leaves the
+    character's spine from top to bottom, one a little over it leaves (nearly) nothing."""
+    mm = 2.0
+    rng = np.random.default_rng(3)
+    for _ in range(2):
+        r = plates.random_registration(country, rng)
+        p = plates.render_plate(r, px_per_mm=mm)
+        ink = p["ink"] > 0.5
+        for c in p["characters"]:
+            x0, y0, x1, y1 = c["bbox"]
+            if country == "ru":
+                height, stroke = (76, 11) if x0 < 400 * mm and c["char"].isdigit() else (58, 9)
+            else:
+                height, stroke = 75, 10
+            assert abs((y1 - y0) - height * mm) <= 2, (c, (y1 - y0) / mm)
+            g = ink[y0:y1, x0:x1]
+            spine = _erode(g, 0.5 * stroke * mm - 1.5)
+            rows = np.nonzero(spine.any(axis=1))[0]
+            assert rows.size and (rows.max() - rows.min()) > 0.6 * (y1 - y0), (c, "strokes thinner than the standard's")
+            assert _erode(g, 0.5 * stroke * mm + 2.0).sum() < 0.02 * g.sum(), (c, "strokes wider than the standard's")

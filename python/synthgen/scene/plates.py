@@ -8,8 +8,11 @@
   most 8 letters and digits together; recognition letters without umlauts, and the
   combinations HJ, KZ, NS, SA, SS are not issued.
 
-Fonts are approximated with DejaVu Sans Condensed Bold (FE-Schrift and the GOST font are not
-packaged). :func:`render_plate` returns the colour texture, an embossing normal map
+Characters are drawn from geometry by :mod:`synthgen.scene.glyphs` (a stroke font after the
+standards' forms: the official GOST and FE-Schrift fonts are not packaged), at the standards'
+heights and stroke widths: Russian digits 76 mm (strokes 11 mm), letters and region code 58 mm
+(9 mm), "RUS" 20 mm (3 mm); German characters 75 mm (10 mm), letters 47.5 and digits 44.5 mm
+wide (the narrow 40.5 / 38.5 mm form for long registrations). :func:`render_plate` returns the colour texture, an embossing normal map
 (tangent space, the characters and the rim raised) and the text with every character's
 pixel box, for OCR datasets. Russian letters are drawn with their Latin look-alike glyphs
 (as on real plates); the metadata has the Cyrillic text and `text_latin`.
@@ -17,10 +20,11 @@ pixel box, for OCR datasets. Russian letters are drawn with their Latin look-ali
 from __future__ import annotations
 
 import re
-from typing import Any, Dict, List, Tuple
+from typing import Any, Dict, List
 
 import numpy as np
 
+from . import glyphs as G
 from . import raster as R
 
 __all__ = ["COUNTRIES", "random_registration", "is_valid_registration", "render_plate", "RU_LETTERS",
@@ -97,35 +101,39 @@ def is_valid_registration(country: str, text: str) -> bool:
             len(district) + len(letters) + len(digits) <= 8)
 
 
-def _glyph(ch: str, size: float, font: str) -> Tuple[np.ndarray, Tuple[int, int, int, int]]:
-    """A character's coverage in a tight box, and its box relative to (pen x, baseline)."""
-    x0, y0, x1, y1 = R.text_box(ch, size, font)
-    pad = 4
-    h, w = (y1 - y0) + 2 * pad, (x1 - x0) + 2 * pad
-    m = R.text_mask(h, w, ch, pad - x0, pad - y0, size, font)
-    return m, (x0 - pad, y0 - pad, x1 + pad, y1 + pad)
+def _group_width(text: str, widths: Dict[str, float], gap: float) -> float:
+    """Width of a group of characters laid out by :func:`_place_glyphs` (boxes and gaps)."""
+    cs = [ch for ch in text if ch != " "]
+    return float(sum(_box_width(ch, widths) for ch in cs) + gap * max(0, len(cs) - 1))
 
 
-def _width(text: str, size: float, font: str, spacing: float) -> float:
-    """Ink width of `text` laid out by _place_text."""
-    ws = [_glyph(RU_TO_LATIN.get(ch, ch), size, font)[0].shape[1] - 8 for ch in text if ch != " "]
-    return float(sum(ws) + spacing * max(0, len(ws) - 1))
+def _box_width(ch: str, widths: Dict[str, float]) -> float:
+    """A character's box width: its group's (``widths[ch]`` or ``widths["*"]``), wider for the
+    glyphs the standards draw wider (M, W)."""
+    latin = RU_TO_LATIN.get(ch, ch)
+    return widths.get(ch, widths["*"]) * G.WIDTH.get(latin, 0.62) / 0.62
 
 
-def _place_text(img: np.ndarray, ink: np.ndarray, text: str, x_left: float, x_right: float, baseline: float,
-                size: float, font: str, color, chars: List[Dict[str, Any]], spacing: float = 0.0) -> None:
-    """Draws `text` spread over [x_left, x_right] (centred, `spacing` pixels between
-    characters), recording each character's ink box."""
-    glyphs = [(ch, *_glyph(RU_TO_LATIN.get(ch, ch), size, font)) for ch in text if ch != " "]
-    if not glyphs:
+def _place_glyphs(img: np.ndarray, ink: np.ndarray, text: str, x_left: float, x_right: float, baseline: float,
+                  height: float, stroke: float, widths: Dict[str, float], gap: float, color,
+                  chars: List[Dict[str, Any]]) -> None:
+    """Draws ``text`` (its Latin look-alikes) with the plate stroke font
+    (:mod:`synthgen.scene.glyphs`), centred in [x_left, x_right]: each character ``height``
+    pixels tall standing on ``baseline`` (image row), its box ``widths[ch]`` (``widths["*"]``
+    by default) wide, ``gap`` pixels between boxes, strokes ``stroke`` pixels wide; records each
+    character's ink box."""
+    cs = [ch for ch in text if ch != " "]
+    if not cs:
         return
-    widths = [g[1].shape[1] - 8 for g in glyphs]  # ink widths (pad 4 each side)
-    total = sum(widths) + spacing * (len(glyphs) - 1)
-    x = 0.5 * (x_left + x_right - total)
+    x = 0.5 * (x_left + x_right - _group_width(text, widths, gap))
     H, W = ink.shape
-    for (ch, m, box), wd in zip(glyphs, widths):
-        gx0 = int(round(x)) - 4
-        gy0 = int(round(baseline + box[1]))
+    for ch in cs:
+        wd = _box_width(ch, widths)
+        m, (ox, oy) = G.glyph_coverage(RU_TO_LATIN.get(ch, ch), height, stroke, width_px=wd)
+        # NOTE: the glyph is rasterized at an integer origin, so x is rounded (1/2 px at 2 px/mm
+        # is a quarter of a millimetre).
+        gx0 = int(round(x - ox))
+        gy0 = int(round(baseline - height - oy))
         h, w = m.shape
         ys, xs = slice(max(0, gy0), min(H, gy0 + h)), slice(max(0, gx0), min(W, gx0 + w))
         sub = m[ys.start - gy0: ys.stop - gy0, xs.start - gx0: xs.stop - gx0]
@@ -135,7 +143,7 @@ def _place_text(img: np.ndarray, ink: np.ndarray, text: str, x_left: float, x_ri
         R.paint(img, cover, color)
         rows, cols = np.nonzero(cover > 0.5)
         chars.append({"char": ch, "bbox": [int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1]})
-        x += wd + spacing
+        x += wd + gap
 
 
 def _normal_map(height: np.ndarray, strength: float) -> np.ndarray:
@@ -165,7 +173,6 @@ def render_plate(registration: Dict[str, Any], px_per_mm: float = 2.0, emboss: f
     img = R.canvas(H, W, (0.85, 0.85, 0.85))
     ink = np.zeros((H, W), np.float32)
     chars: List[Dict[str, Any]] = []
-    font = R.font_path("DejaVuSansCondensed-Bold")
     black = (0.02, 0.02, 0.02)
     # Rim: a black border 1.5 mm inside the plate edge, 2 mm wide.
     outer = R.rounded_rect_sdf(H, W, 1.5 * mm, 1.5 * mm, W - 1.5 * mm, H - 1.5 * mm, 4 * mm)
@@ -177,20 +184,29 @@ def render_plate(registration: Dict[str, Any], px_per_mm: float = 2.0, emboss: f
         line = R.coverage_sdf(R.rounded_rect_sdf(H, W, split - mm, 1.5 * mm, split + mm, H - 1.5 * mm))
         R.paint(img, line, black)
         ink = np.maximum(ink, line)
-        base = 0.5 * H + 0.5 * 0.76 * 58 * mm
+        # GOST R 50577-93, type 1: digits 76 mm high (strokes 11 mm), letters and the region code
+        # 58 mm (9 mm), "RUS" 20 mm (3 mm); the letters stand on the digits' baseline.
         l1, num, l23, region = parts
-        # Letters 58 mm, digits 76 mm high (cap heights; DejaVu's cap height is 0.73 em).
-        _place_text(img, ink, l1, 10 * mm, 70 * mm, base, 58 * mm / 0.73, font, black, chars)
-        _place_text(img, ink, num, 70 * mm, 245 * mm, 0.5 * H + 0.5 * 76 * mm, 76 * mm / 0.73, font, black, chars,
-                    spacing=6 * mm)
-        _place_text(img, ink, l23, 245 * mm, 395 * mm, base, 58 * mm / 0.73, font, black, chars, spacing=6 * mm)
-        _place_text(img, ink, region, split + 5 * mm, W - 5 * mm, 62 * mm, 45 * mm / 0.73, font, black, chars,
-                    spacing=3 * mm)
+        base = H - 18 * mm
+        letters = {"*": 42 * mm}
+        digits = {"*": 47 * mm}
+        total = _group_width(l1, letters, 0) + 12 * mm + _group_width(num, digits, 8 * mm) + 12 * mm + \
+            _group_width(l23, letters, 8 * mm)
+        x = 0.5 * (split - total)
+        for text, wds, height, stroke, gap in ((l1, letters, 58, 9, 0), (num, digits, 76, 11, 8),
+                                               (l23, letters, 58, 9, 8)):
+            wd = _group_width(text, wds, gap * mm)
+            _place_glyphs(img, ink, text, x, x + wd, base, height * mm, stroke * mm, wds, gap * mm, black, chars)
+            x += wd + 12 * mm
+        narrow = len(region) == 3
+        _place_glyphs(img, ink, region, split, W - 3.5 * mm, 68 * mm, 58 * mm, 9 * mm,
+                      {"*": (30 if narrow else 38) * mm}, (4 if narrow else 6) * mm, black, chars)
         # "RUS" and the flag below the region code (not part of the registration text).
         rus: List[Dict[str, Any]] = []
-        _place_text(img, ink, "RUS", split + 10 * mm, W - 40 * mm, 95 * mm, 16 * mm / 0.73, font, black, rus)
+        _place_glyphs(img, ink, "RUS", split + 6 * mm, W - 34 * mm, 98 * mm, 20 * mm, 3 * mm, {"*": 12.5 * mm},
+                      3 * mm, black, rus)
         for k, col in enumerate(((0.9, 0.9, 0.9), (0.0, 0.2, 0.6), (0.75, 0.05, 0.05))):
-            y0 = 82 * mm + k * 5 * mm
+            y0 = 78 * mm + k * 6.7 * mm
             R.paint(img, R.coverage_sdf(R.rounded_rect_sdf(H, W, W - 36 * mm, y0, W - 12 * mm, y0 + 5 * mm)), col)
     else:
         band = R.coverage_sdf(R.rounded_rect_sdf(H, W, 3.5 * mm, 3.5 * mm, 45 * mm, H - 3.5 * mm, 2 * mm))
@@ -200,33 +216,42 @@ def render_plate(registration: Dict[str, Any], px_per_mm: float = 2.0, emboss: f
             R.paint(img, R.coverage_sdf(R.circle_sdf(H, W, 24 * mm + 11 * mm * np.cos(a), 35 * mm + 11 * mm * np.sin(a),
                                                      1.6 * mm)), (0.9, 0.75, 0.0))
         country: List[Dict[str, Any]] = []
-        _place_text(img, ink, "D", 5 * mm, 44 * mm, 95 * mm, 26 * mm / 0.73, font, (0.95, 0.95, 0.95), country)
+        _place_glyphs(img, ink, "D", 5 * mm, 44 * mm, 97 * mm, 26 * mm, 4 * mm, {"*": 18 * mm}, 0,
+                      (0.95, 0.95, 0.95), country)
         district, letters, digits = parts
-        # Characters 75 mm high where they fit; the font (wider than FE-Schrift) is scaled down
-        # uniformly when the registration would not fit between the EU band and the rim.
-        size = 75 * mm / 0.73
+        # DIN 1451 / FE-Schrift: 75 mm high, strokes 10 mm; letters 47.5 mm and digits 44.5 mm
+        # wide, or the narrow form (40.5 and 38.5 mm) when a long registration would not fit
+        # between the EU band and the rim (FZV Anlage 4), then narrower still if need be.
         gap, seal = 4 * mm, 44 * mm
-        natural = _width(district, size, font, gap) + _width(letters, size, font, gap) + \
-            _width(digits, size, font, gap) + seal + 2 * 8 * mm + 12 * mm
         avail = W - 50 * mm - 8 * mm
-        size *= min(1.0, avail / natural)
-        scale = size / (75 * mm / 0.73)
-        base = 0.5 * H + 0.5 * 0.73 * size
+
+        def need(wl: float, wd: float) -> float:
+            return (_group_width(district, {"*": wl}, gap) + _group_width(letters, {"*": wl}, gap) +
+                    _group_width(digits, {"*": wd}, gap) + seal + 2 * 8 * mm + 12 * mm)
+
+        wl, wd = 47.5 * mm, 44.5 * mm
+        if need(wl, wd) > avail:
+            wl, wd = 40.5 * mm, 38.5 * mm
+        f = min(1.0, avail / need(wl, wd))
+        wl, wd = wl * f, wd * f
+        base = 0.5 * H + 0.5 * 75 * mm
         x = 50 * mm
-        wd = _width(district, size, font, gap)
-        _place_text(img, ink, district, x, x + wd, base, size, font, black, chars, spacing=gap)
-        x += wd + 8 * mm * scale
+        w_d = _group_width(district, {"*": wl}, gap)
+        _place_glyphs(img, ink, district, x, x + w_d, base, 75 * mm, 10 * mm, {"*": wl}, gap, black, chars)
+        x += w_d + 8 * mm
         # The two seals (registration and inspection stickers), as coloured discs.
-        r_seal = 0.5 * seal * scale
+        r_seal = 0.5 * seal
         sx = x + r_seal
-        R.paint(img, R.coverage_sdf(R.circle_sdf(H, W, sx, 0.5 * H - 1.05 * r_seal, r_seal)), (0.2, 0.45, 0.25))
-        R.paint(img, R.coverage_sdf(R.circle_sdf(H, W, sx, 0.5 * H + 1.05 * r_seal, r_seal)), (0.75, 0.6, 0.2))
-        x = sx + r_seal + 8 * mm * scale
-        wl = _width(letters, size, font, gap)
-        _place_text(img, ink, letters, x, x + wl, base, size, font, black, chars, spacing=gap)
-        x += wl + 12 * mm * scale
-        _place_text(img, ink, digits, x, x + _width(digits, size, font, gap), base, size, font, black, chars,
-                    spacing=gap)
+        R.paint(img, R.coverage_sdf(R.circle_sdf(H, W, sx, 0.5 * H - 1.05 * r_seal * 0.5, r_seal * 0.5)),
+                (0.2, 0.45, 0.25))
+        R.paint(img, R.coverage_sdf(R.circle_sdf(H, W, sx, 0.5 * H + 1.05 * r_seal * 0.5, r_seal * 0.5)),
+                (0.75, 0.6, 0.2))
+        x = sx + r_seal + 8 * mm
+        w_l = _group_width(letters, {"*": wl}, gap)
+        _place_glyphs(img, ink, letters, x, x + w_l, base, 75 * mm, 10 * mm, {"*": wl}, gap, black, chars)
+        x += w_l + 12 * mm
+        _place_glyphs(img, ink, digits, x, x + _group_width(digits, {"*": wd}, gap), base, 75 * mm, 10 * mm,
+                      {"*": wd}, gap, black, chars)
     return {"rgb": img[..., :3].copy(), "normal": _normal_map(ink, emboss), "ink": ink, "size_mm": (wmm, hmm),
             "px_per_mm": px_per_mm, "country": c, "text": registration["text"],
             "text_latin": "".join(RU_TO_LATIN.get(ch, ch) for ch in registration["text"]), "characters": chars}
