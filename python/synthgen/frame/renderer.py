@@ -274,6 +274,13 @@ class FrameRenderer:
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
         }
+        # Vehicles' plates: where each plate and each of its characters is in the image.
+        for k, rec in enumerate(meta["objects"]):
+            if keep[k] and "plates" in rec and objects[k].shape.plates:
+                from ..randomize.plates import project_plates
+
+                rec["plates"] = dict(rec["plates"], image=project_plates(
+                    rec["plates"], objects[k].shape.plates, objects[k].world, camera, arrays.get("depth")))
         if fp is None and photo_meta is not None:
             meta["background"] = photo_meta
         if fp is not None:
@@ -373,7 +380,9 @@ class FrameRenderer:
         model = kind in ("primitive", "mesh", "asset")
         ctx = randomize.ObjectContext(self.library, rng, o, shape.lo, shape.hi,
                                       forward=_AXIS[(o.forward or shape.forward or "+x") if model else "+x"],
-                                      up=_AXIS[(o.up or shape.up or "+y") if model else "+y"])
+                                      up=_AXIS[(o.up or shape.up or "+y") if model else "+y"],
+                                      plates=shape.plates if model else None,
+                                      plate_material=shape.plate_material if model else None)
         done = {}
         for r in randomize.randomizers(by="apply_order"):
             value = o.randomizers.get(r.key)

@@ -34,6 +34,11 @@ class Shape:
         self.material_ids = material_ids
         #: The model's own forward and up axes ("+z", ...) when its asset declares them.
         self.forward, self.up = forward, up
+        #: A vehicle's plate mounting rectangles (name -> 4 x 3 corners in mesh coordinates: top
+        #: left, top right, bottom right, bottom left as one faces the plate) and the placeholder
+        #: material of each one's quad (None: no plates).
+        self.plates: Dict[str, np.ndarray] = {}
+        self.plate_material: Optional[Dict[str, int]] = None
 
 
 class Shapes:
@@ -42,6 +47,13 @@ class Shapes:
     def __init__(self, scene: Scene):
         self.scene = scene
         self._shapes: Dict[Tuple[str, Any], Shape] = {}
+        self._grey_material: Optional[int] = None
+
+    def _grey(self) -> int:
+        """A grey material for the triangles of a model without materials that gains parts."""
+        if self._grey_material is None:
+            self._grey_material = self.scene.add_material("diffuse", {"albedo": 0.5})
+        return self._grey_material
 
     def get(self, kind: str, value: Any) -> Shape:
         """The shape of ``(kind, value)``: ("primitive", "box" | "sphere" | "cylinder" | "cone"), ("mesh", path),
@@ -65,19 +77,30 @@ class Shapes:
             r = scene.load_mesh_file(path)
             mesh_id = r["mesh_id"]
             arrays = scene.mesh_arrays(mesh_id)
-            if kind == "asset" and "wheels" in entry:
-                # A body whose wheels the library entry describes: one mesh with them.
+            plates, plate_material = {}, None
+            if kind == "asset" and ("wheels" in entry or "plates" in entry):
+                # A vehicle whose wheels or plate mounts the library entry describes: one mesh
+                # with them (the plates with a placeholder material: a blank plate).
                 from ..scene.vehicles import build_vehicle
 
                 tyre = scene.add_material("coated", {"albedo": 0.025, "roughness": 0.75, "specular": 0.4})
                 rim = scene.add_material("conductor", {"metal": "aluminium", "roughness": 0.3})
-                arrays = build_vehicle(scene, arrays, entry, unit, tyre, rim)
+                if entry.get("plates"):  # one placeholder per mount: a blank plate
+                    plate_material = {m: scene.add_material("diffuse", {"albedo": 0.75}) for m in entry["plates"]}
+                mids = np.asarray(arrays["material_ids"])
+                if mids.size == 0 or (mids < 0).any():
+                    arrays = dict(arrays, material_ids=np.where(mids < 0, self._grey(), mids) if mids.size else
+                                  np.full(len(arrays["indices"]), self._grey(), np.int32))
+                built = build_vehicle(scene, arrays, entry, unit, tyre, rim, plate_material)
+                plates, arrays = built.pop("plates"), built
                 mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays["normals"],
                                          uvs=arrays["uvs"], material_ids=arrays["material_ids"], name=value)
             pos = np.asarray(arrays["positions"], np.float64)
             ids = np.asarray(arrays["material_ids"], np.int64)
             distinct = tuple(int(i) for i in np.unique(ids)) if ids.size else (-1,)
-            return Shape(mesh_id, pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
+            shape = Shape(mesh_id, pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
+            shape.plates, shape.plate_material = plates, plate_material
+            return shape
         if kind == "primitive":
             # Unit shapes (1 m across, centred), sized per object by scaling.
             m = {"box": lambda: P.box((1.0, 1.0, 1.0)), "sphere": lambda: P.uv_sphere(0.5, 48, 24),

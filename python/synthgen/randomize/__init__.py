@@ -29,7 +29,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple
+from typing import Any, Dict, List, Mapping, Optional, Tuple
 
 import numpy as np
 
@@ -53,6 +53,10 @@ class ObjectContext:
     #: asset or objects[].forward/up, else +x and +y): where its front is and which way is up.
     forward: Tuple[float, float, float] = (1.0, 0.0, 0.0)
     up: Tuple[float, float, float] = (0.0, 1.0, 0.0)
+    #: A vehicle's plate mounts (name -> 4 x 3 corners in object space) and the placeholder
+    #: material of each one's quad (None: the model has no plate mounts).
+    plates: Optional[Dict[str, np.ndarray]] = None
+    plate_material: Optional[Dict[str, int]] = None
 
 
 class Randomizer:

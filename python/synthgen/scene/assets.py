@@ -82,7 +82,7 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if not isinstance(e, dict):
                 raise AssetError(f"{where}: expected a mapping")
             allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions",
-                       "forward", "up", "optional", "ride_height", "wheels"}
+                       "forward", "up", "optional", "ride_height", "wheels", "plates"}
             for k in e:
                 if k not in allowed:
                     m = difflib.get_close_matches(str(k), allowed, n=1)
@@ -106,6 +106,8 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                 raise AssetError(f"{where} ({e['id']}): forward and up must be different axes")
             if "wheels" in e:
                 _check_wheels(e["wheels"], f"{where} ({e['id']}): wheels")
+            if "plates" in e:
+                _check_plates(e["plates"], f"{where} ({e['id']}): plates")
             if e["id"] in out:
                 raise AssetError(f"{where}: duplicate id '{e['id']}'")
             out[e["id"]] = dict(e, manifest=path)
@@ -135,6 +137,22 @@ def _check_wheels(w: Any, where: str) -> None:
             raise AssetError(f"{where}.{k}: expected a positive number (metres)")
     if w.get("rim_radius", 0) >= w["radius"]:
         raise AssetError(f"{where}.rim_radius: must be less than radius")
+
+
+def _check_plates(p: Any, where: str) -> None:
+    """A vehicle's plate mounts: front and / or rear, each {height (m, > 0), offset (m)}."""
+    if not isinstance(p, dict) or not p:
+        raise AssetError(f"{where}: expected a mapping with front and / or rear")
+    for name, spec in p.items():
+        if name not in ("front", "rear"):
+            raise AssetError(f"{where}: unknown plate '{name}' (front or rear)")
+        if not isinstance(spec, dict) or "height" not in spec:
+            raise AssetError(f"{where}.{name}: expected {{height: metres above the ground, offset: metres}}")
+        for k, v in spec.items():
+            if k not in ("height", "offset"):
+                raise AssetError(f"{where}.{name}: unknown key '{k}' (height, offset)")
+            if not isinstance(v, (int, float)) or (k == "height" and v <= 0):
+                raise AssetError(f"{where}.{name}.{k}: expected a number (metres{', > 0' if k == 'height' else ''})")
 
 
 def _lookup(manifest: Dict[str, Dict[str, Any]], asset_id: str) -> Dict[str, Any]:

@@ -13,18 +13,29 @@ instance id, one box). The entry's keys (lengths in metres, along the model's ow
 ``wheels``
     ``axles`` (positions along forward), ``track`` (the distance between a pair's centres: one
     value, or one per axle), ``radius``, ``width``, ``rim_radius`` (optional, default 0.62
-    radius).
+    radius);
+``plates``
+    ``front`` and / or ``rear``: ``{height}`` (the plate's centre above the ground) and
+    optionally ``offset`` (along the right): the plate's mounting rectangle is found by casting
+    rays along the vehicle's axis onto its body over the plate's rectangle (its centre, edges
+    and corners, 520 x 112 mm); the plate stands 5 mm ahead of the furthest hit, flat and
+    upright, as on its bracket. The plate quads are part of the mesh with one placeholder material (a blank
+    plate), which the ``plates`` randomizer replaces per frame with a registration's texture.
 
 Models whose faces carry no normals get smooth ones within a crease angle (AC3D's convention).
 """
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Mapping, Sequence, Tuple
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["AXES", "model_axes", "revolve", "wheel_mesh", "crease_normals", "build_vehicle"]
+__all__ = ["AXES", "PLATE_MM", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
+           "build_vehicle"]
+
+#: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
+PLATE_MM = (520.0, 112.0)
 
 AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
 
@@ -129,11 +140,72 @@ def crease_normals(positions: np.ndarray, indices: np.ndarray, crease_deg: float
     return inverse.reshape(-1, 3), uniq[:, 0].astype(np.int64), uniq[:, 1:].astype(np.float32)
 
 
+def ray_mesh(pos: np.ndarray, tri: np.ndarray, origins: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Distance along ``direction`` (unit) from each origin to the first triangle hit (inf: none).
+
+    NOTE: Moller-Trumbore ray-triangle intersection (Moller & Trumbore 1997), vectorized over the
+    triangles, one ray at a time (a handful of rays per model, at build time)."""
+    v0, v1, v2 = pos[tri[:, 0]], pos[tri[:, 1]], pos[tri[:, 2]]
+    e1, e2 = v1 - v0, v2 - v0
+    d = np.asarray(direction, np.float64)
+    p = np.cross(d, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    out = []
+    for o in np.atleast_2d(origins):
+        t0 = o - v0
+        u = np.einsum("ij,ij->i", t0, p) * inv
+        q = np.cross(t0, e1)
+        v = (q @ d) * inv
+        t = np.einsum("ij,ij->i", e2, q) * inv
+        hit = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9)
+        out.append(float(t[hit].min()) if hit.any() else math.inf)
+    return np.asarray(out)
+
+
+def plate_mounts(pos: np.ndarray, tri: np.ndarray, entry: Mapping[str, Any], unit: float) -> Dict[str, np.ndarray]:
+    """The mounting rectangles of the entry's plates: {"front" | "rear": 4 x 3 corners (model
+    units; top left, top right, bottom right, bottom left as one faces the plate)}. ``pos`` is
+    the body standing on the ground (its up coordinate 0 at the ground)."""
+    fwd, up, right = model_axes(entry.get("forward", "+x"), entry.get("up", "+y"))
+    w, h = PLATE_MM[0] / 1000.0 / unit, PLATE_MM[1] / 1000.0 / unit
+    reach = float(np.ptp(pos @ fwd)) + 1.0
+    centre_f = 0.5 * float((pos @ fwd).min() + (pos @ fwd).max())
+    out = {}
+    for name, sgn in (("front", 1.0), ("rear", -1.0)):
+        spec = (entry.get("plates") or {}).get(name)
+        if spec is None:
+            continue
+        y = float(spec["height"]) / unit
+        off = float(spec.get("offset", 0.0)) / unit
+        outward = sgn * fwd
+        base = (centre_f + sgn * reach) * fwd + y * up
+        hits = []
+        origins = [base + lat * right + dy * up for lat in (off - 0.5 * w, off, off + 0.5 * w)
+                   for dy in (-0.5 * h, 0.0, 0.5 * h)]
+        for t in ray_mesh(pos, tri, np.asarray(origins), -outward):
+            if math.isfinite(t):
+                hits.append(reach - t)  # how far the surface reaches out from the centre plane
+        if not hits:
+            raise ValueError(f"{name} plate at {spec['height']} m: no body surface there")
+        c = (centre_f + sgn * (max(hits) + 0.005 / unit)) * fwd + y * up + off * right
+        # Facing the plate from outside, one's right is the vehicle's left at the front (-right)
+        # and its right at the rear.
+        lr = -right if name == "front" else right
+        out[name] = np.array([c - 0.5 * w * lr + 0.5 * h * up, c + 0.5 * w * lr + 0.5 * h * up,
+                              c + 0.5 * w * lr - 0.5 * h * up, c - 0.5 * w * lr - 0.5 * h * up])
+    return out
+
+
 def build_vehicle(scene: Any, body: Mapping[str, Any], entry: Mapping[str, Any], unit: float,
-                  tyre_material: int, rim_material: int) -> Dict[str, np.ndarray]:
+                  tyre_material: int, rim_material: int, plate_materials: Optional[Mapping[str, int]] = None
+                  ) -> Dict[str, Any]:
     """The arrays of a vehicle mesh (positions, indices, normals, uvs or None, material_ids) in the
-    model's units: ``body`` (:meth:`Scene.mesh_arrays` of the imported model) lifted by the entry's
-    ride height, its four (or more) wheels added. ``unit``: metres per model unit."""
+    model's units, and its plate mounts (``plates``: name -> 4 x 3 corners): ``body``
+    (:meth:`Scene.mesh_arrays` of the imported model) lifted by the entry's ride height, its
+    wheels (if the entry has ``wheels``) and plate quads (``plates``, each with its placeholder
+    material from ``plate_materials``) added. ``unit``: metres per model unit."""
     axes = model_axes(entry.get("forward", "+x"), entry.get("up", "+y"))
     fwd, up, right = axes
     pos = np.asarray(body["positions"], np.float64)
@@ -151,6 +223,24 @@ def build_vehicle(scene: Any, body: Mapping[str, Any], entry: Mapping[str, Any],
     # The body's lowest point goes to the ride height (in model units along up).
     lift = float(entry.get("ride_height", 0.0)) / unit - float((pos @ up).min())
     pos = pos + lift * up
+    P, N, T, M, U = [pos], [nrm], [tri], [mids], [uvs]
+    base = len(pos)
+    mounts = plate_mounts(pos, tri, entry, unit) if entry.get("plates") else {}
+    for name, q in mounts.items():
+        # Two triangles facing out, the plate texture upright and readable from outside.
+        P.append(q)
+        n = np.cross(q[3] - q[0], q[1] - q[0])  # towards the one facing it
+        N.append(np.repeat((n / np.linalg.norm(n))[None].astype(np.float32), 4, 0))
+        T.append(np.array([[0, 3, 2], [0, 2, 1]], np.int64) + base)
+        M.append(np.full(2, (plate_materials or {}).get(name, -1), np.int32))
+        U.append(np.array([[0, 1], [1, 1], [1, 0], [0, 0]], np.float32))
+        base += 4
+    if uvs is None and mounts:
+        U[0] = np.zeros((len(pos), 2), np.float32)
+    out = {"plates": mounts}
+    if "wheels" not in entry:
+        out.update(_concat(P, N, T, M, U))
+        return out
     w = entry["wheels"]
     radius, width = float(w["radius"]), float(w["width"])
     rim = float(w.get("rim_radius", 0.62 * radius))
@@ -159,8 +249,7 @@ def build_vehicle(scene: Any, body: Mapping[str, Any], entry: Mapping[str, Any],
     wheel, part = wheel_mesh(radius / unit, width / unit, rim / unit)
     # Wheel frame: its axis (z) along the model's right, its radial plane spanned by forward, up.
     frame = np.stack([fwd, up, right])  # rows: where the wheel's x, y, z go
-    P, N, T, M, U = [pos], [nrm], [tri], [mids], [uvs]
-    base = len(pos)
+    has_uv = U[0] is not None
     for a, tr in zip(axles, track):
         for side in (-1.0, 1.0):
             centre = (a * fwd + radius * up + side * 0.5 * float(tr) * right) / unit
@@ -172,9 +261,14 @@ def build_vehicle(scene: Any, body: Mapping[str, Any], entry: Mapping[str, Any],
             N.append((wheel["normals"] @ fr).astype(np.float32))
             T.append(wheel["indices"].astype(np.int64) + base)
             M.append(np.where(part == 0, tyre_material, rim_material).astype(np.int32))
-            U.append(None if uvs is None else np.zeros((len(wheel["positions"]), 2), np.float32))
+            U.append(np.zeros((len(wheel["positions"]), 2), np.float32) if has_uv else None)
             base += len(wheel["positions"])
+    out.update(_concat(P, N, T, M, U))
+    return out
+
+
+def _concat(P, N, T, M, U) -> Dict[str, Any]:
     return {"positions": np.concatenate(P).astype(np.float32), "indices": np.concatenate(T).astype(np.uint32),
             "normals": np.concatenate(N).astype(np.float32),
-            "uvs": None if uvs is None else np.concatenate(U).astype(np.float32),
+            "uvs": None if U[0] is None else np.concatenate(U).astype(np.float32),
             "material_ids": np.concatenate(M).astype(np.int32)}
