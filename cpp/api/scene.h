@@ -34,6 +34,7 @@ namespace sg {
 struct ImportResult {
   uint32_t mesh_id = 0;
   std::vector<uint32_t> material_ids;  ///< materials created from the file's materials
+  std::vector<std::string> material_names;  ///< the file's name of each (same order)
   std::vector<uint32_t> texture_ids;   ///< textures created (one per distinct image)
   size_t removed_degenerate = 0;       ///< zero-area triangles dropped on import
 };

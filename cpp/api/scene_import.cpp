@@ -132,6 +132,7 @@ ImportResult Scene::load_mesh_file(const std::string& path) {
     }
     remap[i] = int32_t(mid);
     result.material_ids.push_back(mid);
+    result.material_names.push_back(im.name);
   }
   for (int32_t& id : model.mesh.material_ids) id = id >= 0 ? remap[size_t(id)] : -1;
   try {

@@ -266,6 +266,11 @@ a BVH build). render() commits pending edits first.)doc")
              py::dict d;
              d["mesh_id"] = r.mesh_id;
              d["material_ids"] = r.material_ids;
+             // Names as the file spells them; bytes that are not UTF-8 (old MTL files) replaced.
+             py::list names;
+             for (const std::string& n : r.material_names)
+               names.append(py::reinterpret_steal<py::str>(PyUnicode_DecodeUTF8(n.data(), py::ssize_t(n.size()), "replace")));
+             d["material_names"] = names;
              d["texture_ids"] = r.texture_ids;
              d["removed_degenerate"] = r.removed_degenerate;
              return d;

@@ -38,7 +38,7 @@ def error_of(tmp_path, text: str) -> SceneFileError:
 
 def test_shipped_scenarios_validate():
     for name in ("scenarios/default.yaml", "scenarios/road_signs.yaml", "scenarios/augmented_road.yaml",
-                 "tests/python/scenarios/tiny.yaml"):
+                 "scenarios/vehicles.yaml", "tests/python/scenarios/tiny.yaml"):
         sc = S.load_scenario(os.path.join(REPO, name))
         assert sc.class_names and sc.count >= 1
 

@@ -382,7 +382,8 @@ class FrameRenderer:
                                       forward=_AXIS[(o.forward or shape.forward or "+x") if model else "+x"],
                                       up=_AXIS[(o.up or shape.up or "+y") if model else "+y"],
                                       plates=shape.plates if model else None,
-                                      plate_material=shape.plate_material if model else None)
+                                      plate_material=shape.plate_material if model else None,
+                                      roles=shape.roles if model else None)
         done = {}
         for r in randomize.randomizers(by="apply_order"):
             value = o.randomizers.get(r.key)

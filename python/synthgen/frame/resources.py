@@ -18,6 +18,7 @@ import numpy as np
 from .._core import Scene
 from .. import randomize
 from ..scene import primitives as P
+from ..scene.assets import AssetError
 
 __all__ = ["Shape", "Shapes", "FrameLibrary", "Pool"]
 
@@ -39,6 +40,8 @@ class Shape:
         #: material of each one's quad (None: no plates).
         self.plates: Dict[str, np.ndarray] = {}
         self.plate_material: Optional[Dict[str, int]] = None
+        #: Material ids of the model by the role its entry gives them ("paint": [...]).
+        self.roles: Dict[str, List[int]] = {}
 
 
 class Shapes:
@@ -48,6 +51,13 @@ class Shapes:
         self.scene = scene
         self._shapes: Dict[Tuple[str, Any], Shape] = {}
         self._grey_material: Optional[int] = None
+        self._roles: Dict[str, int] = {}
+
+    def _role(self, role: str, make: Callable[[str], Tuple[str, Dict[str, Any]]]) -> int:
+        """The worker's material for a role (glass, chrome, rubber, trim), made once."""
+        if role not in self._roles:
+            self._roles[role] = self.scene.add_material(*make(role))
+        return self._roles[role]
 
     def _grey(self) -> int:
         """A grey material for the triangles of a model without materials that gains parts."""
@@ -77,7 +87,26 @@ class Shapes:
             r = scene.load_mesh_file(path)
             mesh_id = r["mesh_id"]
             arrays = scene.mesh_arrays(mesh_id)
-            plates, plate_material = {}, None
+            plates, plate_material, roles = {}, None, {}
+            if kind == "asset" and entry.get("materials"):
+                # Materials by role (the entry names them): glass, chrome, rubber, trim replaced by
+                # materials that read as such; paint kept, and recorded for the paint randomizer.
+                from ..scene.vehicles import role_material
+
+                by_name = dict(zip(r.get("material_names", []), r["material_ids"]))
+                remap = {}
+                for name, role in entry["materials"].items():
+                    if name not in by_name:
+                        raise AssetError(f"asset '{value}': materials: the model has no material '{name}' (it has "
+                                         f"{', '.join(repr(n) for n in by_name) or 'none'})")
+                    roles.setdefault(role, []).append(int(by_name[name]))
+                    if role != "paint":
+                        remap[int(by_name[name])] = self._role(role, role_material)
+                mids = np.asarray(arrays["material_ids"], np.int32)
+                arrays = dict(arrays, material_ids=np.array([remap.get(int(m), int(m)) for m in mids], np.int32))
+                if "wheels" not in entry and "plates" not in entry:
+                    mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays.get("normals"),
+                                             uvs=arrays.get("uvs"), material_ids=arrays["material_ids"], name=value)
             if kind == "asset" and ("wheels" in entry or "plates" in entry):
                 # A vehicle whose wheels or plate mounts the library entry describes: one mesh
                 # with them (the plates with a placeholder material: a blank plate).
@@ -99,7 +128,7 @@ class Shapes:
             ids = np.asarray(arrays["material_ids"], np.int64)
             distinct = tuple(int(i) for i in np.unique(ids)) if ids.size else (-1,)
             shape = Shape(mesh_id, pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
-            shape.plates, shape.plate_material = plates, plate_material
+            shape.plates, shape.plate_material, shape.roles = plates, plate_material, roles
             return shape
         if kind == "primitive":
             # Unit shapes (1 m across, centred), sized per object by scaling.

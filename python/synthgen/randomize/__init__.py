@@ -57,6 +57,8 @@ class ObjectContext:
     #: material of each one's quad (None: the model has no plate mounts).
     plates: Optional[Dict[str, np.ndarray]] = None
     plate_material: Optional[Dict[str, int]] = None
+    #: The model's material ids by the role its library entry gives them ({"paint": [...]}).
+    roles: Optional[Dict[str, List[int]]] = None
 
 
 class Randomizer:

@@ -82,7 +82,7 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if not isinstance(e, dict):
                 raise AssetError(f"{where}: expected a mapping")
             allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions",
-                       "forward", "up", "optional", "ride_height", "wheels", "plates"}
+                       "forward", "up", "optional", "ride_height", "wheels", "plates", "materials"}
             for k in e:
                 if k not in allowed:
                     m = difflib.get_close_matches(str(k), allowed, n=1)
@@ -108,6 +108,11 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                 _check_wheels(e["wheels"], f"{where} ({e['id']}): wheels")
             if "plates" in e:
                 _check_plates(e["plates"], f"{where} ({e['id']}): plates")
+            if "materials" in e:
+                roles = ("paint", "glass", "chrome", "rubber", "trim")
+                if not isinstance(e["materials"], dict) or not all(v in roles for v in e["materials"].values()):
+                    raise AssetError(f"{where} ({e['id']}): materials: expected {{material name: role}}, the roles "
+                                     f"being {', '.join(roles)}")
             if e["id"] in out:
                 raise AssetError(f"{where}: duplicate id '{e['id']}'")
             out[e["id"]] = dict(e, manifest=path)

@@ -22,6 +22,11 @@ instance id, one box). The entry's keys (lengths in metres, along the model's ow
     upright, as on its bracket. The plate quads are part of the mesh with one placeholder material (a blank
     plate), which the ``plates`` randomizer replaces per frame with a registration's texture.
 
+``materials``
+    ``{<material name in the model>: role}``: ``paint`` (the body: the ``paint`` randomizer
+    recolours it), ``glass`` (dark, a smooth coat reflecting the sky: it shows the interior as
+    dark as it looks from outside by day), ``chrome``, ``rubber``, ``trim`` (black plastic).
+
 Models whose faces carry no normals get smooth ones within a crease angle (AC3D's convention).
 """
 from __future__ import annotations
@@ -31,13 +36,26 @@ from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["AXES", "PLATE_MM", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
+__all__ = ["AXES", "PLATE_MM", "ROLES", "role_material", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
            "build_vehicle"]
 
 #: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
 PLATE_MM = (520.0, 112.0)
 
 AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+
+
+#: Roles a library entry can give a model's materials.
+ROLES = ("paint", "glass", "chrome", "rubber", "trim")
+
+
+def role_material(role: str) -> Tuple[str, Dict[str, Any]]:
+    """(plugin, parameters) of the material of a role (not paint, which keeps the model's
+    colour until the paint randomizer draws one)."""
+    return {"glass": ("coated", {"albedo": 0.015, "roughness": 0.0, "ior": 1.52}),
+            "chrome": ("conductor", {"metal": "chrome", "roughness": 0.06}),
+            "rubber": ("coated", {"albedo": 0.025, "roughness": 0.75, "specular": 0.4}),
+            "trim": ("coated", {"albedo": 0.03, "roughness": 0.45, "specular": 0.6})}[role]
 
 
 def model_axes(forward: str = "+x", up: str = "+y") -> np.ndarray:
