@@ -174,3 +174,64 @@ def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
     assert changed.mean() > 0.3, f"only {changed.mean():.2f} of the scratch pixels changed"
     with pytest.raises(sg.SynthgenError, match="depth"):
         wear.scratches(sg.Scene(), 0, depth=0.5)
+
+
+def test_dirt_on_a_library_car_is_densest_low(tmp_path):
+    """Road grime on a library car, measured on its renders from four sides (albedo labels of
+    the dirty car against the clean one: how far each pixel moved towards the dirt): the
+    bottom fifth of the body carries at least 3x the dirt of the top fifth."""
+    import json
+    import os
+
+    import OpenImageIO as oiio
+
+    from synthgen import run as runner
+    from synthgen.scene import assets
+
+    car = "mesh/sumo-car-normal-citrus"
+    try:
+        assets.resolve(car)
+    except Exception as e:  # noqa: BLE001
+        pytest.skip(f"{car} is not available: {e}")
+
+    def render(name, dirt):
+        d = tmp_path / name
+        d.mkdir()
+        (d / "s.yaml").write_text(f"""
+seed: 5
+resolution: [320, 240]
+camera: {{fov_y: 30, pose: {{type: orbit, target: [0, 0.8, 0], distance: 9, elevation: 12,
+  azimuth: {{choice: [0, 90, 180, 270]}}}}}}
+lights: [{{type: environment, radiance: 1.0}}]
+objects: [{{class: car, asset: {car}, yaw: 0, paint: {{palette: cars}}, wear: {{dirt: {dirt}}}}}]
+placement: {{region: [-0.01, -0.01, 0.01, 0.01]}}
+render: {{spp: 1, max_depth: 1}}
+outputs: [albedo, instance, depth]
+""")
+        s = runner.run(str(d / "s.yaml"), str(d / "ds"), count=8, progress=False)
+        assert not s["failures"], s.text()
+        return str(d / "ds")
+
+    dirty, clean = render("dirty", "{amount: 0.25}"), render("clean", "{probability: 0}")
+    bands = np.zeros((5, 2))
+    for k in range(8):
+        meta = json.load(open(os.path.join(dirty, "meta", f"{k:06d}.json")))
+        col = np.asarray(meta["objects"][0]["wear"]["dirt"]["color"])
+        a1 = oiio.ImageBuf(os.path.join(dirty, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
+        a0 = oiio.ImageBuf(os.path.join(clean, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
+        ids = oiio.ImageBuf(os.path.join(dirty, "instance", f"{k:06d}.png")).get_pixels(oiio.UINT16)[..., 0]
+        depth = oiio.ImageBuf(os.path.join(dirty, "depth", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)[..., 0]
+        K, W = np.asarray(meta["camera"]["K"]), np.asarray(meta["camera"]["world_from_camera"])
+        ys, xs = np.nonzero(ids == 1)
+        z = depth[ys, xs]
+        cam = np.stack([(xs + 0.5 - K[0, 2]) / K[0, 0] * z, (ys + 0.5 - K[1, 2]) / K[1, 1] * z, z, np.ones_like(z)])
+        height = (W @ cam)[1] / meta["objects"][0]["dimensions_hwl"][0]
+        band = np.clip((height * 5).astype(int), 0, 4)
+        c0, c1 = a0[ys, xs], a1[ys, xs]
+        towards = np.linalg.norm(col - c0, axis=1)
+        w = np.where(towards > 0.05, np.clip(np.linalg.norm(c1 - c0, axis=1) / np.maximum(towards, 1e-6), 0, 1), 0.0)
+        for i in range(5):
+            bands[i] += (w[band == i].sum(), (band == i).sum())
+    cover = bands[:, 0] / np.maximum(bands[:, 1], 1)
+    print(f"\ndirt by fifth of the car's height (bottom to top): {np.round(cover, 3).tolist()}")
+    assert cover[0] >= 3.0 * cover[4], cover

@@ -42,9 +42,14 @@ SCHEMA = Record({
                                                            "(0: none)")),
         "ao_radius": R(Number(0.3, min=0.0001, max=100.0, doc="crease search distance, metres")),
         "ao_weight": R(Number(1.0, min=0.0, max=4.0, doc="dirt in creases (ambient occlusion)")),
-        "color": R(Vector(3, (0.12, 0.09, 0.06), min=0.0, max=1.0, broadcast=True, doc="dirt colour (linear RGB)")),
-        "roughness": R(Number(0.95, min=0.0, max=1.0, doc="dirt roughness"))},
-        "dirt settled by gravity and in creases (synthgen.scene.wear.dirt)"),
+        "color": R(Vector(3, (0.12, 0.09, 0.06), min=0.0, max=1.0, broadcast=True, doc="dirt colour (linear RGB; "
+                                                                                       "darker in creases)")),
+        "roughness": R(Number(0.95, min=0.0, max=1.0, doc="dirt roughness")),
+        "splash": R(Number(1.0, min=0.0, max=4.0, doc="droplets thrown up by the wheels, low on the body (0: none)")),
+        "softness": R(Number(0.3, min=0.01, max=2.0, doc="how gradually the film thins out at its edges (mask "
+                                                         "units; small: sharp-edged patches)"))},
+        "road grime: a film densest low on the body, in creases and where the wheels splash, thinning with height "
+        "(synthgen.scene.wear.dirt)"),
     "scratches": _wear_effect(1.0, {
         "density": R(Number(8.0, min=0.001, max=10000.0, doc="cells of the scratch pattern per metre")),
         "width": R(Number(0.04, min=0.0001, max=1.0, doc="line width, as a fraction of a cell")),

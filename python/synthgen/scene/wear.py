@@ -186,27 +186,67 @@ def ice(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.5, scale: 
 
 def dirt(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.4, scale: float = 5.0,
          bottom_bias: float = 1.0, ao_radius: float = 0.3, ao_weight: float = 1.0,
-         color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95) -> Any:
-    """Dirt on ``base``: gravity-biased accumulation (more at the bottom, relative-local
-    height, ``bottom_bias``) and ambient-occlusion-driven accumulation (more in creases and
-    corners: 1 - AO from 4 rays of ``ao_radius`` metres at the shading point, weighted by
-    ``ao_weight``), modulated by fBm (``scale``); ``amount`` is the fraction covered in the open
-    (AO 1), creases get more. The dirt is a rough principled material of ``color``."""
+         color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95, splash: float = 1.0,
+         wheels: Sequence[float] = (), softness: float = 0.3) -> Any:
+    """Dirt on ``base``, as road grime settles: a film that is densest low on the body and thins
+    with height (relative-local height, ``bottom_bias``), gathers in creases and corners (1 - AO
+    from 4 rays of ``ao_radius`` metres at the shading point, ``ao_weight``), is splashed up by
+    the wheels (``splash``: fine droplets, densest low and at the wheels' positions along the
+    body, ``wheels``: relative positions along the object's x, e.g. its axles; none: the whole
+    length), varies softly over the body (fBm, ``scale``) with soft edges (``softness``, in
+    mask units: a film, not blobs), and is darker in creases (its colour times 0.55 + 0.45 AO).
+    ``amount`` is the fraction covered in the open (AO 1), creases get more. The dirt is a rough
+    principled material of ``color``."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 4.0)
     _check("ao_radius", ao_radius, 1e-4, 100.0)
     ao_weight = _check("ao_weight", ao_weight, 0.0, 4.0)
-    noise = scene.add_texture("noise", {"pattern": "fbm", "mapping": "relative", "scale": float(scale),
+    splash = _check("splash", splash, 0.0, 4.0)
+    softness = _check("softness", softness, 0.01, 2.0)
+    noise = scene.add_texture("noise", {"pattern": "fbm", "octaves": 3, "mapping": "relative", "scale": float(scale),
                                         "seed": int(seed), "remap": [-1.0, 1.0]})
     height = scene.add_texture("gradient", {"axis": "y", "mapping": "relative", "invert": True})
-    raw = {"a": TextureRef(noise), "b": TextureRef(height), "op": "add", "factor": bottom_bias * 0.25}
+    raw: Dict[str, Any] = {"a": TextureRef(noise), "b": TextureRef(height), "op": "add", "factor": bottom_bias * 0.25}
+    if splash > 0.0:
+        # Droplets thrown up by the wheels: fine noise, weighted by the height (squared: they
+        # fall back within a wheel's height) and, along the body, by the wheels' positions.
+        drops = scene.add_texture("noise", {"pattern": "plain", "mapping": "relative", "scale": float(scale) * 12.0,
+                                            "seed": int(seed) + 5, "remap": [-1.0, 1.0]})
+        low = scene.add_texture("gradient", {"axis": "y", "mapping": "relative", "invert": True, "remap": [0.5, 1.0],
+                                             "smooth": True})
+        weight = TextureRef(low)
+        if len(wheels):
+            pos, col = [0.0], [0.25]
+            for w in sorted(float(np.clip(v, 0.0, 1.0)) for v in wheels):
+                for p_, c_ in ((w - 0.15, 0.25), (w, 1.0), (w + 0.15, 0.25)):
+                    if pos[-1] < p_ < 1.0:
+                        pos.append(p_)
+                        col.append(c_)
+            pos.append(1.0)
+            col.append(0.25)
+            along = scene.add_texture("gradient", {"axis": "x", "mapping": "relative", "ramp_positions": pos,
+                                                   "ramp_colors": [c for c_ in col for c in (c_, c_, c_)]})
+            weight = TextureRef(scene.add_texture("blend", {"a": TextureRef(low), "b": TextureRef(along),
+                                                            "op": "multiply", "factor": 1.0}))
+        spl = scene.add_texture("blend", {"a": TextureRef(drops), "b": weight, "op": "multiply", "factor": 1.0})
+        raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(spl), "op": "add",
+               "factor": splash * 0.35}
+    ao_open = None
     if ao_weight > 0.0:
         occl = scene.add_texture("ao", {"radius": float(ao_radius), "samples": 4, "invert": True})  # 1 - AO
         raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(occl), "op": "add",
                "factor": ao_weight * 0.5}
-    mask = _mask(scene, raw, amount, 0.08)
-    wear = scene.add_material("principled", {"base_color": [float(c) for c in color], "roughness": float(roughness)})
+        ao_open = scene.add_texture("ao", {"radius": float(ao_radius), "samples": 4})
+    mask = _mask(scene, raw, amount, softness)
+    col = [float(c) for c in color]
+    if ao_open is not None:
+        # Darker in creases: the colour times 0.55 + 0.45 AO.
+        shade = scene.add_texture("blend", {"a": [0.55 * c for c in col], "b": col, "op": "mix",
+                                            "factor": TextureRef(ao_open)})
+        wear = scene.add_material("principled", {"base_color": TextureRef(shade), "roughness": float(roughness)})
+    else:
+        wear = scene.add_material("principled", {"base_color": col, "roughness": float(roughness)})
     return _mix(scene, base, wear, mask, stochastic=True)
 
 
