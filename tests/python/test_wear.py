@@ -150,7 +150,8 @@ def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
         g = P.plane(4.0, 4.0)
         mesh = s.add_mesh(g["positions"], g["indices"], normals=g["normals"])  # no uvs needed
         base = s.add_material("diffuse", {"albedo": [0.6, 0.1, 0.1]})
-        mat = wear.scratches(s, base, density=3.0, width=0.05, seed=3, roughness=0.2, depth=depth)
+        # (The cellular style: lines wider than a pixel here, so that paint pixels see no groove.)
+        mat = wear.scratches(s, base, density=3.0, width=0.05, seed=3, roughness=0.2, depth=depth, style="cells")
         s.add_instance(mesh, np.eye(4), class_id=1, material_id=mat)
         s.add_light("sun", {"direction": [0.4, 1.0, 0.2], "irradiance": 3.0, "angular_diameter": 0.0})
         pose = sg.PinholeCamera.look_at((0.0, 2.5, -0.8), (0.0, 0.0, 0.2), (0.0, 1.0, 0.0))

@@ -55,12 +55,17 @@ SCHEMA = Record({
         "width": R(Number(0.04, min=0.0001, max=1.0, doc="line width, as a fraction of a cell")),
         "direction": R(Choice(["x", "y", "z"], None, doc="object axis the scratches run along "
                                                           "(default: random directions)")),
-        "elongation": R(Number(8.0, min=1.0, max=100.0, doc="cell stretch along direction")),
+        "elongation": R(Number(8.0, min=1.0, max=100.0, doc="strokes: the longest is elongation / 8 cells "
+                                                            "(at most 2); cells: stretch along direction")),
         "metal": R(Choice(["aluminium", "chrome", "copper", "gold", "iron", "silver"], "aluminium",
                           doc="the bare metal under the scratched paint")),
         "roughness": R(Number(0.35, min=0.0, max=1.0, doc="roughness of the bare metal")),
         "depth": R(Number(0.0, min=0.0, max=0.01, doc="groove depth in metres (tilts the "
-                                                      "metal's normal; 0: flat)"))},
+                                                      "metal's normal; 0: flat)")),
+        "style": R(Choice(["strokes", "swirl", "cells"], "strokes",
+                          doc="strokes: straight strokes of random length and depth; swirl: polishing arcs; cells: "
+                              "the edges of a cellular pattern")),
+        "spread": R(Number(12.0, min=0.0, max=90.0, doc="angular spread of directed strokes, degrees"))},
         "scratches through the paint down to bare metal (synthgen.scene.wear.scratches)"),
     "ice": _wear_effect(0.5, {
         "scale": R(Number(4.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),

@@ -20,7 +20,7 @@ EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
     ("clean", {}),
     ("rust", {"amount": 0.4, "scale": 3, "bottom_bias": 0.8}),
     ("dirt", {"amount": 0.45, "scale": 5, "bottom_bias": 1.5}),
-    ("scratches", {"density": 10, "width": 0.05, "amount": 0.7}),
+    ("scratches", {"density": 6, "width": 0.08, "amount": 0.8, "elongation": 12}),
     ("ice", {"amount": 0.5, "scale": 4, "top_bias": 0.8}),
     ("decal", {"image": "stripes"}),
     ("plate", {"country": "de"}),

@@ -125,29 +125,55 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
 
 def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
               amount: float = 1.0, direction: Optional[Sequence[float]] = None, elongation: float = 8.0,
-              metal: str = "aluminium", roughness: float = 0.35, depth: float = 0.0) -> Any:
-    """Scratches through ``base`` down to bare metal: thin lines along the edges of a
-    cellular pattern (F2 - F1 below ``width``), ``density`` cells per metre (object mapping);
-    with ``direction`` ('x', 'y' or 'z') the cells are stretched ``elongation`` times along
-    that axis, giving oriented scratches; ``amount`` < 1 keeps only a noise-selected part.
-    The scratch material is a rough ``metal`` conductor (changes albedo and roughness); with
-    ``depth`` > 0 (metres, [0, 0.01]) its shading normal follows the walls of a groove that
-    deep (a bump map of the line profile; costs four more cellular lookups per shaded hit in
-    a scratch)."""
+              metal: str = "aluminium", roughness: float = 0.35, depth: float = 0.0, style: str = "strokes",
+              spread: float = 12.0) -> Any:
+    """Scratches through ``base`` down to bare metal, ``density`` cells per metre (object
+    mapping), lines ``width`` of a cell wide. ``style``:
+
+    - ``strokes`` (default): straight strokes of random length (up to ``elongation`` / 8 cells)
+      and depth, tapering to their ends (the ``strokes`` texture); with ``direction`` ('x', 'y'
+      or 'z') they run along that axis within ``spread`` degrees (a wiper, a brush, a key along
+      a door), else in every direction;
+    - ``swirl``: swirl marks, circular arcs around random centres in the surface's plane, as
+      polishing leaves them on paint;
+    - ``cells``: the former look, the edges of a cellular pattern (F2 - F1 below ``width``),
+      stretched ``elongation`` times along ``direction``.
+
+    ``amount`` < 1 keeps only a noise-selected part (scratches come in clusters). The scratch
+    material is a rough ``metal`` conductor (changes albedo and roughness); with ``depth`` > 0
+    (metres, [0, 0.01]) its shading normal follows the walls of a groove that deep (a bump map
+    of the line profile)."""
     _check("density", density, 1e-3, 1e4)
     width = _check("width", width, 1e-4, 1.0)
     amount = _check("amount", amount, 0.0, 1.0)
     _check("elongation", elongation, 1.0, 100.0)
     _check("roughness", roughness, 0.0, 1.0)
     depth = _check("depth", depth, 0.0, 0.01)
-    sc = [float(density)] * 3
+    spread = _check("spread", spread, 0.0, 90.0)
+    if style not in ("strokes", "swirl", "cells"):
+        raise SynthgenError(f"wear: 'style' must be strokes, swirl or cells, got {style!r}")
+    axis = None
     if direction is not None:
         axis = {"x": 0, "y": 1, "z": 2}.get(str(direction))
         if axis is None:
             raise SynthgenError(f"wear: 'direction' must be x, y or z, got {direction!r}")
-        sc[axis] = float(density) / float(elongation)
-    lines = scene.add_texture("cellular", {"output": "f2_minus_f1", "mapping": "object", "scale": sc, "seed": int(seed),
-                                           "remap": [0.0, width], "invert": True, "smooth": True})
+    if style == "cells":
+        sc = [float(density)] * 3
+        if axis is not None:
+            sc[axis] = float(density) / float(elongation)
+        lines = scene.add_texture("cellular", {"output": "f2_minus_f1", "mapping": "object", "scale": sc,
+                                               "seed": int(seed), "remap": [0.0, width], "invert": True,
+                                               "smooth": True})
+    else:
+        params: Dict[str, Any] = {"mode": "straight" if style == "strokes" else "swirl", "mapping": "object",
+                                  "scale": float(density), "seed": int(seed), "width": min(0.5, float(width)),
+                                  "density": 4}
+        if style == "strokes":
+            longest = min(2.0, max(0.1, float(elongation) / 8.0))
+            params.update(length=[0.3 * longest, longest], spread=float(spread))
+            if axis is not None:
+                params["direction"] = [1.0 if i == axis else 0.0 for i in range(3)]
+        lines = scene.add_texture("strokes", params)
     mask = lines
     if amount < 1.0:
         sel = scene.add_texture("noise", {"pattern": "fbm", "mapping": "object", "scale": float(density) / 4.0,
@@ -155,11 +181,11 @@ def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, 
         keep = _mask(scene, {"a": TextureRef(sel), "b": 0.0, "op": "add"}, amount, 0.02)
         mask = scene.add_texture("blend", {"a": TextureRef(lines), "b": TextureRef(keep), "op": "multiply",
                                            "factor": 1.0})
-    params: Dict[str, Any] = {"metal": metal, "roughness": float(roughness)}
+    mparams: Dict[str, Any] = {"metal": metal, "roughness": float(roughness)}
     if depth > 0.0:
         # Height = -depth x the line profile (1 at the groove's centre line, 0 beyond `width`).
-        params.update(bump_map=TextureRef(lines), bump_scale=-depth)
-    wear = scene.add_material("conductor", params)
+        mparams.update(bump_map=TextureRef(lines), bump_scale=-depth)
+    wear = scene.add_material("conductor", mparams)
     return _mix(scene, base, wear, mask)
 
 
