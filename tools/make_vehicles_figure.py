@@ -1,0 +1,46 @@
+#!/usr/bin/env python3
+"""docs/vehicles.png: a strip of four frames of scenarios/vehicles.yaml (library vehicles with
+plates, paint and road dirt on a two-lane road) at half size, as `synthgen run` renders them.
+
+    .venv/bin/python tools/make_vehicles_figure.py [--frames 0,1,2,3] [-o docs/vehicles.png]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(REPO, "python"))
+
+import numpy as np  # noqa: E402
+
+
+def main(argv=None) -> int:
+    from synthgen.frame.renderer import FrameRenderer
+    from synthgen.outputs.files import to_srgb8
+    from synthgen.scenario import check_inputs, load_scenario
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--frames", default="0,1,2,3")
+    ap.add_argument("-o", "--output", default=os.path.join(REPO, "docs", "vehicles.png"))
+    args = ap.parse_args(argv)
+    sc = load_scenario(os.path.join(REPO, "scenarios", "vehicles.yaml"))
+    check_inputs(sc)
+    fr = FrameRenderer(sc)
+    tiles = []
+    for k in (int(v) for v in args.frames.split(",")):
+        arrays, _, _ = fr.render(k)
+        tiles += [to_srgb8(arrays["rgb"])[::2, ::2], np.full((arrays["rgb"].shape[0] // 2, 4, 3), 255, np.uint8)]
+    img = np.concatenate(tiles[:-1], axis=1)
+    import OpenImageIO as oiio
+
+    b = oiio.ImageBuf(oiio.ImageSpec(img.shape[1], img.shape[0], 3, oiio.UINT8))
+    b.set_pixels(oiio.ROI(), np.ascontiguousarray(img))
+    b.write(args.output)
+    print(f"wrote {args.output} ({img.shape[1]} x {img.shape[0]})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
