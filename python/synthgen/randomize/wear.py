@@ -70,8 +70,10 @@ SCHEMA = Record({
     "ice": _wear_effect(0.5, {
         "scale": R(Number(4.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
         "top_bias": R(Number(0.5, min=0.0, max=2.0, doc="more ice high on the object (0: none)")),
-        "bump": R(Number(0.003, min=0.0, max=0.05, doc="height of the frost's relief, metres"))},
-        "ice and frost, more towards the top (synthgen.scene.wear.ice)"),
+        "bump": R(Number(0.003, min=0.0, max=0.05, doc="height of the frost's relief, metres")),
+        "softness": R(Number(0.25, min=0.01, max=2.0, doc="how gradually the frost thins out at its edges (mask "
+                                                          "units)"))},
+        "ice and frost with soft edges, more towards the top (synthgen.scene.wear.ice)"),
 }, default=None, doc="wear effects (synthgen.wear presets), applied in the order rust, dirt, scratches, ice")
 
 

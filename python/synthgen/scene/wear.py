@@ -190,19 +190,21 @@ def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, 
 
 
 def ice(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.5, scale: float = 4.0,
-        bump: float = 0.003, top_bias: float = 0.5) -> Any:
+        bump: float = 0.003, top_bias: float = 0.5, softness: float = 0.25) -> Any:
     """Ice / frost over ``base``: a white glossy layer (principled, clearcoat 1, roughness
     0.15) with a turbulence bump of ``bump`` metres, where an fBm mask (relative mapping,
-    ``scale``, biased towards the top by ``top_bias``) covers ``amount`` of the object."""
+    ``scale``, biased towards the top by ``top_bias``) covers ``amount`` of the object, thinning
+    out over ``softness`` (mask units) at its edges, as frost does (not a sharp-edged patch)."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     _check("bump", bump, 0.0, 0.05)
     top_bias = _check("top_bias", top_bias, 0.0, 2.0)
+    softness = _check("softness", softness, 0.01, 2.0)
     noise = scene.add_texture("noise", {"pattern": "fbm", "mapping": "relative", "scale": float(scale),
                                         "seed": int(seed), "remap": [-1.0, 1.0]})
     height = scene.add_texture("gradient", {"axis": "y", "mapping": "relative"})
     mask = _mask(scene, {"a": TextureRef(noise), "b": TextureRef(height), "op": "add", "factor": top_bias * 0.25},
-                 amount, 0.05)
+                 amount, softness)
     bump_tex = scene.add_texture("noise", {"pattern": "turbulence", "mapping": "object", "scale": 60.0,
                                            "seed": int(seed) + 3})
     wear = scene.add_material("principled", {"base_color": [0.85, 0.9, 0.95], "roughness": 0.15, "clearcoat": 1.0,
