@@ -121,20 +121,27 @@ MaterialContext Scene::material_context(std::vector<uint32_t>* depends_on) const
 }
 
 void Scene::assign_ao(MaterialEntry& e) const {
-  float radius = 0.f;
-  int samples = 0;
+  float radius = 0.f, edge_radius = 0.f;
+  int samples = 0, edge_samples = 0;
   for (const auto& kv : e.params.values())
     if (auto r = std::get_if<TextureRef>(&kv.second))
       if (r->id < m_textures.size() && m_textures[r->id]) {
-        radius = std::max(radius, m_textures[r->id]->object->ao_radius());
-        samples = std::max(samples, m_textures[r->id]->object->ao_samples());
+        const Texture& t = *m_textures[r->id]->object;
+        radius = std::max(radius, t.ao_radius());
+        samples = std::max(samples, t.ao_samples());
+        edge_radius = std::max(edge_radius, t.edge_radius());
+        edge_samples = std::max(edge_samples, t.edge_samples());
       }
   for (uint32_t d : e.depends_on)
     if (d < m_materials.size() && m_materials[d]) {
-      radius = std::max(radius, m_materials[d]->object->ao_radius());
-      samples = std::max(samples, m_materials[d]->object->ao_samples());
+      const Material& m = *m_materials[d]->object;
+      radius = std::max(radius, m.ao_radius());
+      samples = std::max(samples, m.ao_samples());
+      edge_radius = std::max(edge_radius, m.edge_radius());
+      edge_samples = std::max(edge_samples, m.edge_samples());
     }
   if (radius > 0.f) e.object->set_ao(radius, samples);
+  if (edge_radius > 0.f) e.object->set_edges(edge_radius, edge_samples);
 }
 
 uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {

@@ -85,6 +85,10 @@ struct SurfaceInteraction {
   /// Ambient occlusion at the point (fraction of unoccluded short rays, 1 = open), computed by
   /// the integrator when the material needs it (k_needs_ao); 1 otherwise.
   float ao = 1.f;
+  /// Convex-edge measure at the point (fraction of short rays along the surface that find no
+  /// surface: 0 on an open panel, up to 1 at a thin edge), computed by the integrator when the
+  /// material needs it (k_needs_edges); 0 otherwise.
+  float edge = 0.f;
   /// True at the hit of a camera ray (set by the integrator): materials that trade noise
   /// for speed (the stochastic "mix") stay exact there, where the surface is seen directly.
   bool primary = false;
@@ -121,6 +125,7 @@ inline TexturePoint texture_point(const SurfaceInteraction& si) {
   q.world_footprint = si.world_footprint;
   q.object_per_world = si.object_per_world;
   q.ao = si.ao;
+  q.edge = si.edge;
   q.n_world = si.ns;
   q.n_object = si.n_object;
   return q;
@@ -158,6 +163,7 @@ enum MaterialNeeds : uint32_t {
   k_needs_tangent = 1u << 0,    ///< SurfaceInteraction::dpdu (anisotropy, normal maps)
   k_needs_footprint = 1u << 1,  ///< uv footprint (filtered textures)
   k_needs_ao = 1u << 2,         ///< SurfaceInteraction::ao (an "ao" texture): short occlusion rays
+  k_needs_edges = 1u << 3,      ///< SurfaceInteraction::edge (an "edges" texture): rays along the surface
 };
 
 enum BsdfFlags : uint32_t {
@@ -202,6 +208,14 @@ class Material {
     m_ao_radius = radius;
     m_ao_samples = samples;
     if (radius > 0.f) m_traits.needs |= k_needs_ao;
+  }
+  /// Convex-edge rays wanted by the material's textures ("edges"), as set_ao.
+  float edge_radius() const { return m_edge_radius; }
+  int edge_samples() const { return m_edge_samples; }
+  void set_edges(float radius, int samples) {
+    m_edge_radius = radius;
+    m_edge_samples = samples;
+    if (radius > 0.f) m_traits.needs |= k_needs_edges;
   }
   void cache_traits() {
     m_traits = Traits{flags(), needs(), is_emissive()};
@@ -261,6 +275,8 @@ class Material {
   bool m_traits_cached = false;
   float m_ao_radius = 0.f;
   int m_ao_samples = 0;
+  float m_edge_radius = 0.f;
+  int m_edge_samples = 0;
 };
 
 /// What a material plugin may look up while it is created: textures and (for materials

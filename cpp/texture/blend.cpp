@@ -48,6 +48,12 @@ class BlendTexture final : public PointTexture {
   bool needs_position() const override { return m_position; }
   float ao_radius() const override { return std::max({m_a->ao_radius(), m_b->ao_radius(), m_f->ao_radius()}); }
   int ao_samples() const override { return std::max({m_a->ao_samples(), m_b->ao_samples(), m_f->ao_samples()}); }
+  float edge_radius() const override {
+    return std::max({m_a->edge_radius(), m_b->edge_radius(), m_f->edge_radius()});
+  }
+  int edge_samples() const override {
+    return std::max({m_a->edge_samples(), m_b->edge_samples(), m_f->edge_samples()});
+  }
   bool needs_uv_footprint() const override {
     return m_a->needs_uv_footprint() || m_b->needs_uv_footprint() || m_f->needs_uv_footprint();
   }

@@ -28,6 +28,7 @@ struct TexturePoint {
   float world_footprint = 0.f; ///< footprint width at the hit in world units (0 = point sample)
   float object_per_world = 1.f; ///< object-space length per world-space length (instance scale)
   float ao = 1.f;               ///< ambient occlusion at the point ("ao" textures), 1 = open
+  float edge = 0.f;             ///< convex-edge measure at the point ("edges" textures), 0 = open panel
   Vec3f n_world, n_object;      ///< unit shading normal in world and object space (triplanar)
 };
 
@@ -59,6 +60,9 @@ class Texture {
   /// Ray length and ray count of the ambient occlusion this texture reads (0: none).
   virtual float ao_radius() const { return 0.f; }
   virtual int ao_samples() const { return 0; }
+  /// Convex-edge rays wanted ("edges" textures): their length (0 = none) and number.
+  virtual float edge_radius() const { return 0.f; }
+  virtual int edge_samples() const { return 0; }
   /// True when lookups read the uv footprint (uv_footprint, the uv ellipse): image textures
   /// and uv-mapped procedural ones. Procedural textures over 3D mappings read only the world
   /// footprint, which the integrator always provides (cheaply), so the uv ellipse of the ray

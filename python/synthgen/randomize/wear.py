@@ -34,8 +34,13 @@ SCHEMA = Record({
         "bottom_bias": R(Number(0.6, min=0.0, max=2.0, doc="more rust low on the object (0: none, 2: strongly)")),
         "roughness": R(Number(0.85, min=0.0, max=1.0, doc="rust roughness (>= 0.8: Lambertian)")),
         "bump": R(Number(0.002, min=0.0, max=0.05, doc="height of the rust's relief, metres")),
-        "colors": ListOf(_RAMP_STOP, None, min_items=1, doc="colour ramp of the rust (default: dark brown to orange)")},
-        "rust patches with relief, more towards the bottom (synthgen.scene.wear.rust)"),
+        "colors": ListOf(_RAMP_STOP, None, min_items=1, doc="colour ramp of the rust (default: dark brown to orange)"),
+        "edges": R(Number(1.0, min=0.0, max=4.0, doc="rust starting at convex edges and sheet borders (0: none)")),
+        "edge_radius": R(Number(0.03, min=0.0001, max=1.0, doc="how sharp an edge must be, metres (edges sharper "
+                                                               "than about 0.75 of it count)")),
+        "streaks": R(Number(0.5, min=0.0, max=4.0, doc="rust running down in vertical streaks (0: none)"))},
+        "rust with relief, starting at edges, more towards the bottom, running down in streaks "
+        "(synthgen.scene.wear.rust)"),
     "dirt": _wear_effect(0.4, {
         "scale": R(Number(5.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
         "bottom_bias": R(Number(1.0, min=0.0, max=4.0, doc="more dirt low on the object, as gravity leaves it "

@@ -89,24 +89,42 @@ def _mix(scene: Scene, base: Base, wear: int, mask: int, stochastic: bool = Fals
 
 def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale: float = 3.0,
          bottom_bias: float = 0.6, roughness: float = 0.85, bump: float = 0.002,
-         colors: Sequence = RUST_COLORS) -> Any:
-    """Rust over ``base``: an fBm mask in relative-local coordinates (``scale`` features
-    across the object), biased towards the bottom of the object by ``bottom_bias`` (0 = none,
-    1 = strong), covering ``amount`` of it; the rust has a colour-ramp fBm and a turbulence
-    bump of ``bump`` metres: Lambertian for ``roughness`` >= 0.8 (the default 0.85), else a
-    principled material of that roughness."""
+         colors: Sequence = RUST_COLORS, edges: float = 1.0, edge_radius: float = 0.03,
+         streaks: float = 0.5) -> Any:
+    """Rust over ``base``, as it grows on painted steel: it starts at convex edges and sheet
+    borders, where paint is thinnest and chips first (the ``edges`` texture: short rays along
+    the surface, ``edge_radius`` metres; weight ``edges``), spreads as an fBm front in
+    relative-local coordinates (``scale`` features across the object), more towards the bottom
+    (``bottom_bias``: 0 = none, 1 = strong), and runs down in vertical streaks (noise stretched
+    along the object's height, weight ``streaks``), covering ``amount`` of the object; the rust
+    has a colour-ramp fBm and a turbulence bump of ``bump`` metres: Lambertian for ``roughness``
+    >= 0.8 (the default 0.85), else a principled material of that roughness."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 2.0)
     _check("roughness", roughness, 0.0, 1.0)
     _check("bump", bump, 0.0, 0.05)
+    edges = _check("edges", edges, 0.0, 4.0)
+    _check("edge_radius", edge_radius, 1e-4, 1.0)
+    streaks = _check("streaks", streaks, 0.0, 4.0)
     # Octave counts: the mask's shape is large-scale (4 octaves), colour and bump carry the
     # fine detail (4 and 3 octaves); each octave costs one noise evaluation per lookup.
     noise = scene.add_texture("noise", {"pattern": "fbm", "octaves": 4, "mapping": "relative", "scale": float(scale),
                                         "seed": int(seed), "remap": [-1.0, 1.0]})
     height = scene.add_texture("gradient", {"axis": "y", "mapping": "relative", "invert": True})
-    mask = _mask(scene, {"a": TextureRef(noise), "b": TextureRef(height), "op": "add", "factor": bottom_bias * 0.25},
-                 amount, 0.04)
+    raw: Dict[str, Any] = {"a": TextureRef(noise), "b": TextureRef(height), "op": "add", "factor": bottom_bias * 0.25}
+    if streaks > 0.0:
+        # Run-off: noise 12 times finer across than along the height (vertical streaks).
+        run = scene.add_texture("noise", {"pattern": "fbm", "octaves": 3, "mapping": "relative",
+                                          "scale": [float(scale) * 6.0, float(scale) * 0.5, float(scale) * 6.0],
+                                          "seed": int(seed) + 3, "remap": [-1.0, 1.0]})
+        raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(run), "op": "add",
+               "factor": streaks * 0.3}
+    if edges > 0.0:
+        edge = scene.add_texture("edges", {"radius": float(edge_radius), "samples": 8})
+        raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(edge), "op": "add",
+               "factor": edges * 1.5}
+    mask = _mask(scene, raw, amount, 0.04)
     color = scene.add_texture("noise", dict({"pattern": "fbm", "octaves": 4, "mapping": "object", "scale": 12.0,
                                              "seed": int(seed) + 1, "remap": [-0.6, 0.6]}, **_ramp(colors)))
     bump_tex = scene.add_texture("noise", {"pattern": "turbulence", "octaves": 3, "mapping": "object", "scale": 40.0,
