@@ -334,3 +334,23 @@ outputs: [albedo, instance, depth]
           f"from them): {open_.mean():.3f} of {open_.size} px")
     assert near.size > 500 and open_.size > 500
     assert near.mean() >= 2.0 * open_.mean()
+
+
+def test_the_car_row_shows_every_effect_on_the_library_car():
+    """The gallery's car row (docs/gallery_car.png): the library car, clean and with each effect;
+    every effect changes its tile (rendered small here)."""
+    from synthgen.scene import assets, gallery
+
+    try:
+        assets.resolve(gallery.CAR)
+    except Exception as e:  # noqa: BLE001
+        pytest.skip(f"{gallery.CAR} is not available: {e}")
+    w, h = 160, 120
+    img = gallery.render_car_row(tile_w=w, tile_h=h, spp=2)
+    n = len(gallery.CAR_EFFECTS)
+    assert img.shape == (h + 32, n * w, 3)
+    tiles = [img[:h, i * w:(i + 1) * w] for i in range(n)]
+    for (name, _), t in zip(gallery.CAR_EFFECTS[1:], tiles[1:]):
+        # The car is a third of the width: a part of the tile changes, clearly.
+        changed = (np.abs(t - tiles[0]).max(axis=2) > 0.02).mean()
+        assert changed > 0.002, (name, changed)

@@ -11,6 +11,8 @@ from .common import EXIT_OK, positive_int
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", metavar="FILE.png", default=os.path.join("out", "gallery.png"))
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel of each tile (default 32)")
+    p.add_argument("--car", metavar="FILE.png", help="also render the car row (the library car at dataset "
+                                                     "resolution, clean and with each effect) into this file")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -18,9 +20,13 @@ def run(args: argparse.Namespace) -> int:
 
     os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
     print(gallery.write_gallery(args.output, spp=args.spp))
+    if args.car:
+        os.makedirs(os.path.dirname(os.path.abspath(args.car)), exist_ok=True)
+        print(gallery.write_car_row(args.car, spp=args.spp))
     return EXIT_OK
 
 
 register(Command("gallery", "render the wear gallery",
                  "Render every wear effect on a sign, a car body panel and a sphere, with the parameters under each "
-                 "tile.", add_arguments, run, order=70, module=__name__))
+                 "tile (and, with --car, on a library car at dataset resolution).", add_arguments, run, order=70,
+                 module=__name__))

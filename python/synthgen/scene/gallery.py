@@ -14,7 +14,7 @@ import numpy as np
 from . import plates, primitives as P, raster as R, signs, wear
 from .._core import PinholeCamera, Scene, TextureRef
 
-__all__ = ["EFFECTS", "OBJECTS", "render_gallery"]
+__all__ = ["EFFECTS", "OBJECTS", "CAR", "CAR_EFFECTS", "render_gallery", "render_car_row"]
 
 EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
     ("clean", {}),
@@ -125,7 +125,77 @@ def render_gallery(tile_w: int = 240, tile_h: int = 180, spp: int = 32) -> np.nd
     return np.concatenate(rows, axis=0).astype(np.float32)
 
 
+#: The library car of the gallery's car row, and the effects shown on it (the scenario presets'
+#: parameters as a dataset would draw them).
+CAR = "mesh/sumo-car-normal-citrus"
+CAR_EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
+    ("clean", {}),
+    ("rust", {"amount": 0.15, "bottom_bias": 0.6}),
+    ("dirt", {"amount": 0.3}),
+    ("scratches", {"density": 8, "width": 0.08, "amount": 0.7}),
+    ("ice", {"amount": 0.35, "top_bias": 1.0}),
+]
+
+
+def _car_tile(effect: str, params: Dict[str, Any], w: int, h: int, spp: int) -> np.ndarray:
+    """The library car (its own materials, a silver paint, a plate) with one effect, seen as in a
+    dataset: from a driver's height, the car about a third of the image's width."""
+    from ..frame.resources import Shapes
+    from . import vehicles
+
+    s = Scene()
+    ground = P.ground()
+    s.add_instance(s.add_mesh(ground["positions"], ground["indices"], normals=ground["normals"]), np.eye(4),
+                   material_id=s.add_material("diffuse", {"albedo": 0.2}))
+    shape = Shapes(s).get("asset", CAR)
+    keys = list(shape.material_ids)
+    paint = set(shape.roles.get("paint", ()))
+    silver = s.add_material("coated", {"albedo": [0.42, 0.43, 0.45], "roughness": 0.06, "ior": 1.5})
+    mats = [silver if k in paint else k for k in keys]
+    if shape.plate_material:
+        reg = plates.random_registration("ru", np.random.default_rng(4))
+        tex = plates.render_plate(reg, px_per_mm=1.5)
+        col = s.add_image_texture(np.asarray(tex["rgb"], np.float32), {"wrap": "clamp", "colorspace": "linear"})
+        pm = s.add_material("principled", {"base_color": TextureRef(col), "roughness": 0.35})
+        mats = [pm if k in shape.plate_material.values() else m for k, m in zip(keys, mats)]
+    if effect in ("rust", "dirt", "scratches", "ice"):
+        mats = getattr(wear, effect)(s, mats, seed=3, **params)
+    # The model turned to +x forward, +y up, standing on the ground, at its real scale.
+    turn = vehicles.model_axes(shape.forward or "+x", shape.up or "+y")
+    m = np.eye(4)
+    m[:3, :3] = turn * shape.unit
+    lo = (turn @ np.asarray(shape.lo)) * shape.unit
+    hi = (turn @ np.asarray(shape.hi)) * shape.unit
+    m[1, 3] = -min(lo[1], hi[1])
+    inst = s.add_instance(shape.mesh_id, P.rotate([0, 1, 0], -35.0) @ m, class_id=1, instance_id=1,
+                          material_id=-1)
+    s.set_instance_material_map(inst, {k: v for k, v in zip(keys, mats) if k != v})
+    pose = PinholeCamera.look_at((0.0, 1.4, -10.5), (0.0, 0.7, 0.0), (0.0, 1.0, 0.0))
+    s.set_camera(PinholeCamera.from_fov(40.0, w, h, pose))
+    s.add_light("sky", {"elevation": 35.0, "azimuth": 150.0, "turbidity": 3.0, "strength": 0.02})
+    return np.asarray(s.render(spp=spp, max_depth=6, seed=1).rgb)
+
+
+def render_car_row(tile_w: int = 640, tile_h: int = 480, spp: int = 32) -> np.ndarray:
+    """The gallery's car row (linear RGB): the library car :data:`CAR` at dataset resolution,
+    clean and with each effect of :data:`CAR_EFFECTS`, a caption under each tile."""
+    row = []
+    for effect, params in CAR_EFFECTS:
+        tile = _car_tile(effect, params, tile_w, tile_h, spp)
+        ptxt = ", ".join(f"{k}={v}" for k, v in params.items())
+        cap = _caption(f"{CAR}: {effect}\n{ptxt}" if ptxt else f"{CAR}: {effect}", tile_w, 32)
+        cap = np.where(cap <= 0.04045, cap / 12.92, ((cap + 0.055) / 1.055) ** 2.4)
+        row.append(np.concatenate([tile, cap], axis=0))
+    return np.concatenate(row, axis=1).astype(np.float32)
+
+
 def write_gallery(path: str, **kw: Any) -> str:
     from ..outputs.files import write_srgb_png
 
     return write_srgb_png(path, render_gallery(**kw))
+
+
+def write_car_row(path: str, **kw: Any) -> str:
+    from ..outputs.files import write_srgb_png
+
+    return write_srgb_png(path, render_car_row(**kw))
