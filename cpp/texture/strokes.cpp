@@ -43,6 +43,14 @@ class StrokesTexture final : public PointTexture {
 
   StrokesTexture(const Config& c, ProceduralMapping mapping, ProceduralShaping shaping)
       : m_c(c), m_mapping(mapping), m_shaping(std::move(shaping)) {
+    m_directed = dot(c.direction, c.direction) > 0.f;
+    if (m_directed) {
+      m_a = normalize(c.direction);
+      m_b = std::fabs(m_a.x) < 0.9f ? normalize(cross(m_a, Vec3f(1.f, 0.f, 0.f)))
+                                    : normalize(cross(m_a, Vec3f(0.f, 1.f, 0.f)));
+      m_cc = cross(m_a, m_b);
+      m_cos_max = std::cos(c.spread_deg * 0.017453293f);
+    }
     m_average = estimate_average([&](const Vec3f& p) { return m_shaping.color(raw(p, Vec3f(0.f, 0.f, 1.f), 0.f)); });
   }
 
@@ -54,6 +62,10 @@ class StrokesTexture final : public PointTexture {
     float hw0 = 0.5f * m_c.width;
     float hw_f = m_c.band_limit ? std::max(hw0, 0.5f * w) : hw0;
     float gain = hw0 / hw_f;  // NOTE: a widened stroke keeps its area (width x depth)
+    // Swirls: angles in the tangent plane, in a frame fixed by the axes projected on it.
+    Vec3f e1 = std::fabs(n.x) < 0.9f ? normalize(cross(n, Vec3f(1.f, 0.f, 0.f)))
+                                     : normalize(cross(n, Vec3f(0.f, 1.f, 0.f)));
+    Vec3f e2 = cross(n, e1);
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
@@ -94,10 +106,6 @@ class StrokesTexture final : public PointTexture {
               float rho = length(vt);
               if (std::fabs(rho - r) > hw_f + 1e-6f) continue;
               d = std::fabs(rho - r);
-              // Angle in a frame fixed by the world's axes projected on the plane.
-              Vec3f e1 = std::fabs(n.x) < 0.9f ? normalize(cross(n, Vec3f(1.f, 0.f, 0.f)))
-                                               : normalize(cross(n, Vec3f(0.f, 1.f, 0.f)));
-              Vec3f e2 = cross(n, e1);
               float a = std::atan2(dot(vt, e2), dot(vt, e1));  // [-pi, pi]
               float a0 = 6.2831853f * unit_float(cell, k + 5);
               float span = (m_c.arc_deg.x + (m_c.arc_deg.y - m_c.arc_deg.x) * unit_float(cell, k + 6)) *
@@ -130,22 +138,21 @@ class StrokesTexture final : public PointTexture {
  private:
   Vec3f stroke_direction(uint64_t cell, uint64_t k) const {
     float u1 = unit_float(cell, k), u2 = unit_float(cell, k + 1);
-    bool any = dot(m_c.direction, m_c.direction) > 0.f;
     // A direction within `spread` of the preferred one (uniform over that cap), or uniform
     // over the sphere; a stroke and its reverse are one.
-    float cos_max = any ? std::cos(m_c.spread_deg * 0.017453293f) : -1.f;
-    float z = 1.f - u1 * (1.f - cos_max);
+    float z = 1.f - u1 * (1.f - m_cos_max);
     float s = std::sqrt(std::max(0.f, 1.f - z * z));
     float phi = 6.2831853f * u2;
     Vec3f local(s * std::cos(phi), s * std::sin(phi), z);
-    if (!any) return local;
-    Vec3f a = normalize(m_c.direction);
-    Vec3f b = std::fabs(a.x) < 0.9f ? normalize(cross(a, Vec3f(1.f, 0.f, 0.f))) : normalize(cross(a, Vec3f(0.f, 1.f, 0.f)));
-    Vec3f c = cross(a, b);
-    return b * local.x + c * local.y + a * local.z;
+    if (!m_directed) return local;
+    return m_b * local.x + m_cc * local.y + m_a * local.z;
   }
 
   Config m_c;
+  // The preferred direction's frame (a, b, cc: cc = a x b) and the cap's cosine, fixed at creation.
+  bool m_directed = false;
+  Vec3f m_a{0.f, 0.f, 1.f}, m_b{1.f, 0.f, 0.f}, m_cc{0.f, 1.f, 0.f};
+  float m_cos_max = -1.f;
   ProceduralMapping m_mapping;
   ProceduralShaping m_shaping;
   Color m_average;

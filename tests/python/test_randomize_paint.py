@@ -13,6 +13,8 @@ from synthgen.scene import assets
 
 import OpenImageIO as oiio
 
+from test_output_kitti import _asset
+
 CAR = "mesh/sumo-car-normal-citrus"
 
 
@@ -29,10 +31,7 @@ def test_the_palette_draws_colours_by_their_shares():
 
 
 def test_a_vehicle_takes_the_colour_drawn_and_has_dark_glass(tmp_path):
-    try:
-        assets.resolve(CAR)
-    except Exception as e:  # noqa: BLE001
-        pytest.skip(f"{CAR} is not available: {e}")
+    _asset(CAR)
     scen = tmp_path / "s.yaml"
     scen.write_text(f"""
 seed: 8

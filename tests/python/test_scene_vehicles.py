@@ -53,7 +53,7 @@ def test_wheels_stand_at_the_axles_and_the_body_at_its_ride_height():
     body = {"positions": v.astype(np.float32), "indices": tri, "material_ids": np.full(len(tri), 7, np.int32)}
     entry = {"forward": "+x", "up": "+y", "ride_height": 0.15,
              "wheels": {"axles": [1.3, -1.25], "track": [1.5, 1.55], "radius": 0.33, "width": 0.22}}
-    out = build_vehicle(None, body, entry, 1.0, tyre_material=1, rim_material=2)
+    out = build_vehicle(body, entry, 1.0, tyre_material=1, rim_material=2)
     p, mids, t = out["positions"], out["material_ids"], out["indices"]
     body_v = np.unique(t[mids == 7])
     assert p[body_v, 1].min() == pytest.approx(0.15, abs=1e-5)

@@ -177,34 +177,41 @@ def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
         wear.scratches(sg.Scene(), 0, depth=0.5)
 
 
-def test_dirt_on_a_library_car_is_densest_low(tmp_path):
-    """Road grime on a library car, measured on its renders from four sides (albedo labels of
-    the dirty car against the clean one: how far each pixel moved towards the dirt): the
-    bottom fifth of the body carries at least 3x the dirt of the top fifth."""
+CAR = "mesh/sumo-car-normal-citrus"
+
+
+def _library_car():
+    from synthgen.scene import assets
+
+    try:
+        assets.resolve(CAR)
+    except Exception as e:  # noqa: BLE001 - no apt: nothing to test with
+        pytest.skip(f"{CAR} is not available: {e}")
+
+
+def _car_views(tmp_path, effect, params, distance, elevation, azimuths):
+    """The library car (a palette paint) from four sides, with the wear ``effect`` of ``params``
+    (YAML) and clean (the same frames: the effect's probability 0), 8 frames each. Yields, per frame, (meta, worn albedo,
+    clean albedo at the car's pixels, the car's pixels as world points (4 x N))."""
     import json
     import os
 
     import OpenImageIO as oiio
 
     from synthgen import run as runner
-    from synthgen.scene import assets
 
-    car = "mesh/sumo-car-normal-citrus"
-    try:
-        assets.resolve(car)
-    except Exception as e:  # noqa: BLE001
-        pytest.skip(f"{car} is not available: {e}")
+    _library_car()
 
-    def render(name, dirt):
+    def render(name, wear):
         d = tmp_path / name
         d.mkdir()
         (d / "s.yaml").write_text(f"""
 seed: 5
 resolution: [320, 240]
-camera: {{fov_y: 30, pose: {{type: orbit, target: [0, 0.8, 0], distance: 9, elevation: 12,
-  azimuth: {{choice: [0, 90, 180, 270]}}}}}}
+camera: {{fov_y: 30, pose: {{type: orbit, target: [0, 0.8, 0], distance: {distance}, elevation: {elevation},
+  azimuth: {{choice: {list(azimuths)}}}}}}}
 lights: [{{type: environment, radiance: 1.0}}]
-objects: [{{class: car, asset: {car}, yaw: 0, paint: {{palette: cars}}, wear: {{dirt: {dirt}}}}}]
+objects: [{{class: car, asset: {CAR}, yaw: 0, paint: {{palette: cars}}, wear: {{{effect}: {wear}}}}}]
 placement: {{region: [-0.01, -0.01, 0.01, 0.01]}}
 render: {{spp: 1, max_depth: 1}}
 outputs: [albedo, instance, depth]
@@ -213,22 +220,29 @@ outputs: [albedo, instance, depth]
         assert not s["failures"], s.text()
         return str(d / "ds")
 
-    dirty, clean = render("dirty", "{amount: 0.25}"), render("clean", "{probability: 0}")
-    bands = np.zeros((5, 2))
+    worn, clean = render("worn", params), render("clean", "{probability: 0}")
     for k in range(8):
-        meta = json.load(open(os.path.join(dirty, "meta", f"{k:06d}.json")))
-        col = np.asarray(meta["objects"][0]["wear"]["dirt"]["color"])
-        a1 = oiio.ImageBuf(os.path.join(dirty, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
+        meta = json.load(open(os.path.join(worn, "meta", f"{k:06d}.json")))
+        a1 = oiio.ImageBuf(os.path.join(worn, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
         a0 = oiio.ImageBuf(os.path.join(clean, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
-        ids = oiio.ImageBuf(os.path.join(dirty, "instance", f"{k:06d}.png")).get_pixels(oiio.UINT16)[..., 0]
-        depth = oiio.ImageBuf(os.path.join(dirty, "depth", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)[..., 0]
+        ids = oiio.ImageBuf(os.path.join(worn, "instance", f"{k:06d}.png")).get_pixels(oiio.UINT16)[..., 0]
+        depth = oiio.ImageBuf(os.path.join(worn, "depth", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)[..., 0]
         K, W = np.asarray(meta["camera"]["K"]), np.asarray(meta["camera"]["world_from_camera"])
         ys, xs = np.nonzero(ids == 1)
         z = depth[ys, xs]
         cam = np.stack([(xs + 0.5 - K[0, 2]) / K[0, 0] * z, (ys + 0.5 - K[1, 2]) / K[1, 1] * z, z, np.ones_like(z)])
-        height = (W @ cam)[1] / meta["objects"][0]["dimensions_hwl"][0]
+        yield meta, a1[ys, xs], a0[ys, xs], W @ cam
+
+
+def test_dirt_on_a_library_car_is_densest_low(tmp_path):
+    """Road grime on a library car, measured on its renders from four sides (albedo labels of
+    the dirty car against the clean one: how far each pixel moved towards the dirt): the
+    bottom fifth of the body carries at least 3x the dirt of the top fifth."""
+    bands = np.zeros((5, 2))
+    for meta, c1, c0, world in _car_views(tmp_path, "dirt", "{amount: 0.25}", 9, 12, (0, 90, 180, 270)):
+        col = np.asarray(meta["objects"][0]["wear"]["dirt"]["color"])
+        height = world[1] / meta["objects"][0]["dimensions_hwl"][0]
         band = np.clip((height * 5).astype(int), 0, 4)
-        c0, c1 = a0[ys, xs], a1[ys, xs]
         towards = np.linalg.norm(col - c0, axis=1)
         w = np.where(towards > 0.05, np.clip(np.linalg.norm(c1 - c0, axis=1) / np.maximum(towards, 1e-6), 0, 1), 0.0)
         for i in range(5):
@@ -274,59 +288,20 @@ def test_rust_starts_at_the_edges_of_a_library_car(tmp_path):
     """Rust on a library car, measured on its renders from four sides (albedo labels against the
     clean car): within 2 cm of the mesh's sharp edges (borders, and faces meeting at over 35
     degrees) it covers at least twice what it covers on open panels (over 10 cm from them)."""
-    import json
-    import os
-
-    import OpenImageIO as oiio
-
-    from synthgen import run as runner
     from synthgen.frame.resources import Shapes
     from synthgen.scene import assets
 
-    car = "mesh/sumo-car-normal-citrus"
-    try:
-        assets.resolve(car)
-    except Exception as e:  # noqa: BLE001
-        pytest.skip(f"{car} is not available: {e}")
-
-    def render(name, rust):
-        d = tmp_path / name
-        d.mkdir()
-        (d / "s.yaml").write_text(f"""
-seed: 5
-resolution: [320, 240]
-camera: {{fov_y: 30, pose: {{type: orbit, target: [0, 0.8, 0], distance: 8, elevation: 20,
-  azimuth: {{choice: [30, 120, 210, 300]}}}}}}
-lights: [{{type: environment, radiance: 1.0}}]
-objects: [{{class: car, asset: {car}, yaw: 0, paint: {{palette: cars}}, wear: {{rust: {rust}}}}}]
-placement: {{region: [-0.01, -0.01, 0.01, 0.01]}}
-render: {{spp: 1, max_depth: 1}}
-outputs: [albedo, instance, depth]
-""")
-        s = runner.run(str(d / "s.yaml"), str(d / "ds"), count=8, progress=False)
-        assert not s["failures"], s.text()
-        return str(d / "ds")
-
-    rusty, clean = render("rusty", RUST), render("clean", "{probability: 0}")
+    _library_car()
     scene = sg.Scene()
-    shape = Shapes(scene).get("asset", car)
+    shape = Shapes(scene).get("asset", CAR)
     arrays = scene.mesh_arrays(shape.mesh_id)
     seg = _crease_edges(np.asarray(arrays["positions"], np.float64), np.asarray(arrays["indices"], np.int64))
+    unit = float(assets.entry(CAR).get("scale", 1.0))
     near, open_ = [], []
-    for k in range(8):
-        meta = json.load(open(os.path.join(rusty, "meta", f"{k:06d}.json")))
-        a1 = oiio.ImageBuf(os.path.join(rusty, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
-        a0 = oiio.ImageBuf(os.path.join(clean, "albedo", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)
-        ids = oiio.ImageBuf(os.path.join(rusty, "instance", f"{k:06d}.png")).get_pixels(oiio.UINT16)[..., 0]
-        depth = oiio.ImageBuf(os.path.join(rusty, "depth", f"{k:06d}.exr")).get_pixels(oiio.FLOAT)[..., 0]
-        K, W = np.asarray(meta["camera"]["K"]), np.asarray(meta["camera"]["world_from_camera"])
-        ys, xs = np.nonzero(ids == 1)
-        z = depth[ys, xs]
-        cam = np.stack([(xs + 0.5 - K[0, 2]) / K[0, 0] * z, (ys + 0.5 - K[1, 2]) / K[1, 1] * z, z, np.ones_like(z)])
-        obj = np.linalg.inv(np.asarray(meta["objects"][0]["world_from_object"])) @ W @ cam
-        unit = float(assets.entry(car).get("scale", 1.0))
+    for meta, c1, c0, world in _car_views(tmp_path, "rust", RUST, 8, 20, (30, 120, 210, 300)):
+        obj = np.linalg.inv(np.asarray(meta["objects"][0]["world_from_object"])) @ world
         dist = _distance_to_segments(obj[:3].T, seg) * unit  # metres
-        rust = np.abs(a1[ys, xs] - a0[ys, xs]).max(axis=1) > 0.05
+        rust = np.abs(c1 - c0).max(axis=1) > 0.05
         near.append(rust[dist < 0.02])
         open_.append(rust[dist > 0.10])
     near, open_ = np.concatenate(near), np.concatenate(open_)
@@ -339,12 +314,9 @@ outputs: [albedo, instance, depth]
 def test_the_car_row_shows_every_effect_on_the_library_car():
     """The gallery's car row (docs/gallery_car.png): the library car, clean and with each effect;
     every effect changes its tile (rendered small here)."""
-    from synthgen.scene import assets, gallery
+    from synthgen.scene import gallery
 
-    try:
-        assets.resolve(gallery.CAR)
-    except Exception as e:  # noqa: BLE001
-        pytest.skip(f"{gallery.CAR} is not available: {e}")
+    _library_car()
     w, h = 160, 120
     img = gallery.render_car_row(tile_w=w, tile_h=h, spp=2)
     n = len(gallery.CAR_EFFECTS)

@@ -22,6 +22,7 @@ from ..outputs.render import camera_meta
 from ..scenario import Scenario, frame_rng, sample_frame
 from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
 from ..scene import primitives as P
+from ..scene.vehicles import AXES, model_axes
 from .layout import FrameView, amodal_pixels, search_layout
 from .records import PlacedObject, frame_camera, level_frame, object_records
 from .resources import FrameLibrary, Pool, Shape, Shapes, realize
@@ -39,19 +40,15 @@ def light_plugin(light: PluginSpec) -> Tuple[str, Dict[str, Any]]:
     return light.type, params
 
 
-_AXIS = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
-         "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0)}
-
-
 def orientation(forward: str, up: str) -> Optional[np.ndarray]:
     """The rotation (a signed permutation) taking a model's ``forward`` axis to +x and its
     ``up`` axis to +y; None for the identity (+x, +y)."""
     if (forward, up) == ("+x", "+y"):
         return None
-    f, u = np.array(_AXIS[forward]), np.array(_AXIS[up])
-    if abs(float(f @ u)) > 0.5:
-        raise SynthgenError(f"a model's forward ({forward}) and up ({up}) must be different axes")
-    return np.stack([f, u, np.cross(f, u)])
+    try:
+        return model_axes(forward, up)
+    except ValueError:
+        raise SynthgenError(f"a model's forward ({forward}) and up ({up}) must be different axes") from None
 
 
 def tilted(local: np.ndarray, dims: np.ndarray, roll: float, pitch: float) -> Tuple[np.ndarray, float]:
@@ -379,8 +376,8 @@ class FrameRenderer:
             mats = [m if m >= 0 else self._default_material() for m in keys]
         model = kind in ("primitive", "mesh", "asset")
         ctx = randomize.ObjectContext(self.library, rng, o, shape.lo, shape.hi,
-                                      forward=_AXIS[(o.forward or shape.forward or "+x") if model else "+x"],
-                                      up=_AXIS[(o.up or shape.up or "+y") if model else "+y"],
+                                      forward=AXES[(o.forward or shape.forward or "+x") if model else "+x"],
+                                      up=AXES[(o.up or shape.up or "+y") if model else "+y"],
                                       plates=shape.plates if model else None,
                                       plate_material=shape.plate_material if model else None,
                                       roles=shape.roles if model else None)
@@ -401,7 +398,7 @@ class FrameRenderer:
             self.scene.set_instance_labels(inst, o.class_index + 1, k + 1)
         self._set_material_map(inst, material_map)
         info = {r.key: done[r.key] for r in randomize.randomizers() if r.key in done}
-        forward = _AXIS[o.forward or shape.forward or "+x"] if kind in ("primitive", "mesh", "asset") else _AXIS["+x"]
+        forward = AXES[o.forward or shape.forward or "+x"] if kind in ("primitive", "mesh", "asset") else AXES["+x"]
         return PlacedObject(o, shape, inst, local, radius, dims, post, forward=forward, info=info)
 
     def _set_material_map(self, inst: int, material_map: Dict[int, int]) -> None:

@@ -120,7 +120,7 @@ class Shapes:
                 if mids.size == 0 or (mids < 0).any():
                     arrays = dict(arrays, material_ids=np.where(mids < 0, self._grey(), mids) if mids.size else
                                   np.full(len(arrays["indices"]), self._grey(), np.int32))
-                built = build_vehicle(scene, arrays, entry, unit, tyre, rim, plate_material)
+                built = build_vehicle(arrays, entry, unit, tyre, rim, plate_material)
                 plates, arrays = built.pop("plates"), built
                 mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays["normals"],
                                          uvs=arrays["uvs"], material_ids=arrays["material_ids"], name=value)

@@ -109,10 +109,11 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if "plates" in e:
                 _check_plates(e["plates"], f"{where} ({e['id']}): plates")
             if "materials" in e:
-                roles = ("paint", "glass", "chrome", "rubber", "trim")
-                if not isinstance(e["materials"], dict) or not all(v in roles for v in e["materials"].values()):
+                from .vehicles import ROLES
+
+                if not isinstance(e["materials"], dict) or not all(v in ROLES for v in e["materials"].values()):
                     raise AssetError(f"{where} ({e['id']}): materials: expected {{material name: role}}, the roles "
-                                     f"being {', '.join(roles)}")
+                                     f"being {', '.join(ROLES)}")
             if e["id"] in out:
                 raise AssetError(f"{where}: duplicate id '{e['id']}'")
             out[e["id"]] = dict(e, manifest=path)

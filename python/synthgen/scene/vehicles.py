@@ -42,7 +42,9 @@ __all__ = ["AXES", "PLATE_MM", "ROLES", "role_material", "model_axes", "revolve"
 #: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
 PLATE_MM = (520.0, 112.0)
 
-AXES = {"+x": (1, 0, 0), "-x": (-1, 0, 0), "+y": (0, 1, 0), "-y": (0, -1, 0), "+z": (0, 0, 1), "-z": (0, 0, -1)}
+#: The axes a model may declare as its forward and up directions, as unit vectors.
+AXES = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
+        "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0)}
 
 
 #: Roles a library entry can give a model's materials.
@@ -216,7 +218,7 @@ def plate_mounts(pos: np.ndarray, tri: np.ndarray, entry: Mapping[str, Any], uni
     return out
 
 
-def build_vehicle(scene: Any, body: Mapping[str, Any], entry: Mapping[str, Any], unit: float,
+def build_vehicle(body: Mapping[str, Any], entry: Mapping[str, Any], unit: float,
                   tyre_material: int, rim_material: int, plate_materials: Optional[Mapping[str, int]] = None
                   ) -> Dict[str, Any]:
     """The arrays of a vehicle mesh (positions, indices, normals, uvs or None, material_ids) in the
