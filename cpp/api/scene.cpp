@@ -463,6 +463,7 @@ void Scene::build_render_scene() {
   rs.infinite_lights.clear();
   rs.has_catchers = false;
   m_area_lights.clear();
+  m_prim_lights.clear();
   rs.bounds = Bounds3{};
 
   // Per-triangle material pointers of each mesh.
@@ -566,12 +567,31 @@ void Scene::build_render_scene() {
       tris.push_back(et);
     }
     if (!tris.empty()) {
-      auto light = std::make_shared<AreaLight>(uint32_t(i), uint32_t(m.triangle_count()), std::move(tris));
-      r.light = light.get();
-      r.light_index = int32_t(rs.lights.size());
-      rs.lights.push_back(light.get());
-      rs.light_in_catcher_layer.push_back(e->catcher);
-      m_area_lights.push_back(light);
+      // One area light per direction the emitters face (the dominant axis of one-sided
+      // triangles' normals; two-sided ones apart): a car's headlamps and its tail lamps are
+      // then separate lights, each weighed by where it shines (RenderScene::pick_light).
+      std::vector<EmissiveTriangle> bins[7];
+      for (const EmissiveTriangle& et : tris) {
+        int b = 6;
+        if (!et.material->two_sided_emission()) {
+          Vec3f a(std::fabs(et.n.x), std::fabs(et.n.y), std::fabs(et.n.z));
+          int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+          b = 2 * axis + ((axis == 0 ? et.n.x : axis == 1 ? et.n.y : et.n.z) < 0.f ? 1 : 0);
+        }
+        bins[b].push_back(et);
+      }
+      m_prim_lights.emplace_back(new std::vector<int32_t>(m.triangle_count(), -1));
+      std::vector<int32_t>& prim_light = *m_prim_lights.back();
+      for (int b = 0; b < 7; ++b) {
+        if (bins[b].empty()) continue;
+        int32_t index = int32_t(rs.lights.size());
+        for (const EmissiveTriangle& et : bins[b]) prim_light[et.prim] = index;
+        auto light = std::make_shared<AreaLight>(uint32_t(i), uint32_t(m.triangle_count()), std::move(bins[b]));
+        rs.lights.push_back(light.get());
+        rs.light_in_catcher_layer.push_back(e->catcher);
+        m_area_lights.push_back(light);
+      }
+      r.prim_light = prim_light.data();
     }
   }
   for (auto& e : m_lights) {
@@ -589,6 +609,19 @@ void Scene::build_render_scene() {
   std::vector<float> power;
   for (const Light* l : rs.lights) power.push_back(std::max(l->power(), 0.f));
   rs.light_pick = Distribution1D(power);
+  rs.light_weights.clear();
+  const float scene_r = std::max(rs.bounds.radius(), 1e-3f);
+  for (const Light* l : rs.lights) {
+    RenderScene::LightWeight lw;
+    float r = 0.f;
+    lw.local = !l->is_infinite() && l->bounding_sphere(&lw.centre, &r);
+    // A point light's sphere: 1 mm (its weight stays finite at the light).
+    r = std::max(r, 1e-3f);
+    lw.radius2 = r * r;
+    lw.power = lw.local ? std::max(l->power(), 0.f) : std::max(l->power(), 0.f) / (k_pi * scene_r * scene_r);
+    lw.oriented = lw.local && l->normal_cone(&lw.axis, &lw.cone_angle);
+    rs.light_weights.push_back(lw);
+  }
 }
 
 void Scene::render(const RenderSettings& settings, Film* film) {

@@ -219,6 +219,8 @@ class Scene {
   std::unique_ptr<Accel> m_accel;
   std::shared_ptr<Material> m_default_material;
   std::vector<std::shared_ptr<AreaLight>> m_area_lights;
+  /// Per instance with emitters, its triangles' area light indices (InstanceRecord::prim_light).
+  std::vector<std::unique_ptr<std::vector<int32_t>>> m_prim_lights;
   RenderScene m_render_scene;
   CommitStats m_stats;
 };

@@ -182,7 +182,7 @@ class PathTracer {
       Color le = light->le(st.ray.d);
       if (is_black(le)) continue;
       float w = 1.f;
-      if (!st.prev_delta) w = power_heuristic(st.prev_pdf, sc.light_pick.pmf(li) * light->pdf_le(st.ray.d));
+      if (!st.prev_delta) w = power_heuristic(st.prev_pdf, sc.light_pmf(st.ray.o, li) * light->pdf_le(st.ray.d));
       st.L += st.beta * le * w;
     }
     // Lights only reflections see: no MIS (never sampled), only at the end of a camera path of
@@ -229,10 +229,11 @@ class PathTracer {
       Color le = mat->emission(si, wo);
       if (!is_black(le)) {
         float w = 1.f;
-        if (!st.prev_delta && inst.light) {
+        const int32_t li = inst.prim_light ? inst.prim_light[hit.prim] : -1;
+        if (!st.prev_delta && li >= 0) {
           float cos_l = std::fabs(dot(si.ng, wo));
-          float pdf_light = sc.light_pick.pmf(uint32_t(inst.light_index)) * inst.light->area_pdf(hit.prim) *
-                            hit.t * hit.t / cos_l;
+          const AreaLight* area = static_cast<const AreaLight*>(sc.lights[size_t(li)]);
+          float pdf_light = sc.light_pmf(st.ray.o, uint32_t(li)) * area->area_pdf(hit.prim) * hit.t * hit.t / cos_l;
           w = power_heuristic(st.prev_pdf, pdf_light);
         }
         st.L += st.beta * le * w;
@@ -250,7 +251,7 @@ class PathTracer {
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
     if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
       float pick_pmf;
-      size_t li = sc.light_pick.sample(u_pick_lobe.x, &pick_pmf);
+      size_t li = sc.pick_light(si.p, u_pick_lobe.x, &pick_pmf);
       const Light* light = sc.lights[li];
       // Without the inserted objects their emitters are absent: the same choice adds nothing.
       const bool light_absent = layer == RayLayer::catchers && !sc.light_in_catcher_layer[li];

@@ -24,8 +24,9 @@ struct InstanceRecord {
   const Material* material = nullptr;  ///< instance material (override or default)
   bool override_material = false;      ///< ignore per-triangle material ids
   const std::vector<const Material*>* triangle_materials = nullptr;  ///< per triangle, may be null
-  const AreaLight* light = nullptr;
-  int32_t light_index = -1;
+  /// Per triangle, the index (into RenderScene::lights) of the area light holding it, -1 for
+  /// triangles that do not emit; null when the instance emits nothing.
+  const int32_t* prim_light = nullptr;
   /// Hit-point error bound = error_scale * max|object vertex coordinate| + error_offset
   /// (see make_interaction); precomputed from world_from_object at commit.
   float error_scale = 0.f, error_offset = 0.f;
@@ -42,7 +43,26 @@ struct RenderScene {
   /// Per light: 1 when it exists without the inserted objects (lights of the scene, area lights
   /// of catchers), 0 for the emitters of inserted objects (their headlamps).
   std::vector<char> light_in_catcher_layer;
+  /// Lights by power over the whole scene: the choice when there are too many lights to weigh
+  /// at each shading point (pick_light).
   Distribution1D light_pick;
+  /// Per light, what pick_light weighs: flux density at distance d of a light with a place
+  /// (power / (4 pi max(d^2, radius^2)), the sphere holding it), or at any point (power /
+  /// (pi R^2), R the scene's radius: infinite lights, and lights without a place).
+  struct LightWeight {
+    Vec3f centre{0.f};
+    float radius2 = 0.f;
+    float power = 0.f;
+    bool local = false;
+    /// One-sided emitters whose normals lie in a cone: its axis and half-angle (the light
+    /// sends nothing to points behind the cone widened by the sphere's angular radius).
+    bool oriented = false;
+    Vec3f axis{0.f};
+    float cone_angle = k_pi;
+  };
+  std::vector<LightWeight> light_weights;
+  /// Up to this many lights are weighed at each shading point; more fall back to light_pick.
+  static constexpr size_t k_max_weighed_lights = 16;
   std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
   /// Infinite lights seen only by glossy / specular bounces (Light::reflection_only); not in
   /// `lights` (never sampled).
@@ -54,6 +74,70 @@ struct RenderScene {
   bool has_hittable_emitters = false;
   /// Some instance is a catcher: render differentially (Film::differential).
   bool has_catchers = false;
+
+  /// Chooses a light for next-event estimation at p (u in [0, 1)), returning its index and
+  /// its probability in *pmf.
+  /// NOTE: lights are weighed by the flux density each brings to p, isotropic and unoccluded
+  /// (a one-level version of the light trees of Conty Estevez & Kulla 2018, "Importance
+  /// Sampling of Many Lights with Adaptive Tree Splitting", and pbrt-v4's BVHLightSampler):
+  /// by power alone, a car's small, bright lamps next to a sky whose power is counted over
+  /// the whole scene are never chosen, and their light arrives only through BSDF-sampled hits,
+  /// as fireflies.
+  size_t pick_light(const Vec3f& p, float u, float* pmf) const {
+    const size_t n = lights.size();
+    if (n == 1) {
+      *pmf = 1.f;
+      return 0;
+    }
+    if (n > k_max_weighed_lights) return light_pick.sample(u, pmf);
+    float w[k_max_weighed_lights];
+    float total = weigh_lights(p, w);
+    if (!(total > 0.f)) return light_pick.sample(u, pmf);
+    float target = u * total, acc = 0.f;
+    size_t i = 0;
+    for (; i + 1 < n; ++i) {
+      acc += w[i];
+      if (target < acc && w[i] > 0.f) break;
+    }
+    while (w[i] <= 0.f && i > 0) --i;  // rounding at the top end: the last light with weight
+    *pmf = w[i] / total;
+    return i;
+  }
+  /// The probability that pick_light(p, ...) chooses light li.
+  float light_pmf(const Vec3f& p, uint32_t li) const {
+    const size_t n = lights.size();
+    if (n == 1) return 1.f;
+    if (n > k_max_weighed_lights) return light_pick.pmf(li);
+    float w[k_max_weighed_lights];
+    float total = weigh_lights(p, w);
+    if (!(total > 0.f)) return light_pick.pmf(li);
+    return w[li] / total;
+  }
+  float weigh_lights(const Vec3f& p, float* w) const {
+    float total = 0.f;
+    for (size_t i = 0; i < lights.size(); ++i) {
+      const LightWeight& lw = light_weights[i];
+      if (lw.local) {
+        Vec3f d = p - lw.centre;
+        float d2 = dot(d, d);
+        w[i] = lw.power / (4.f * k_pi * std::max(d2, lw.radius2));
+        if (lw.oriented && d2 > lw.radius2) {
+          // NOTE: pbrt-v4's LightBounds::Importance (Pharr et al., "Physically Based Rendering",
+          // 4th ed., sec. 12.6.3): the angle between the cone's axis and the direction to p,
+          // less the cone's half-angle and the sphere's angular radius, bounds the emission
+          // angle from below; its cosine (0 past 90 degrees) weighs the light.
+          float d_len = std::sqrt(d2);
+          float cos_t = std::min(1.f, std::max(-1.f, dot(lw.axis, d) / d_len));
+          float theta = std::acos(cos_t) - lw.cone_angle - std::asin(std::min(1.f, std::sqrt(lw.radius2) / d_len));
+          w[i] *= theta <= 0.f ? 1.f : (theta >= 0.5f * k_pi ? 0.f : std::cos(theta));
+        }
+      } else {
+        w[i] = lw.power;
+      }
+      total += w[i];
+    }
+    return total;
+  }
 
   const Material* material_of(const InstanceRecord& inst, uint32_t prim) const {
     if (!inst.override_material && inst.triangle_materials) {

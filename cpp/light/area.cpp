@@ -36,6 +36,32 @@ AreaLight::AreaLight(uint32_t inst, uint32_t prim_count, std::vector<EmissiveTri
   m_cdf.back() = 1.f;
 }
 
+bool AreaLight::bounding_sphere(Vec3f* centre, float* radius) const {
+  Bounds3 b;
+  for (const auto& t : m_tris) {
+    b.expand(t.p0);
+    b.expand(t.p1);
+    b.expand(t.p2);
+  }
+  *centre = 0.5f * (b.lo + b.hi);
+  *radius = b.radius();
+  return true;
+}
+
+bool AreaLight::normal_cone(Vec3f* axis, float* half_angle) const {
+  Vec3f sum(0.f);
+  for (const auto& t : m_tris) {
+    if (t.two_sided) return false;
+    sum += t.n;
+  }
+  if (!(dot(sum, sum) > 0.f)) return false;
+  *axis = normalize(sum);
+  float cos_min = 1.f;
+  for (const auto& t : m_tris) cos_min = std::min(cos_min, dot(*axis, t.n));
+  *half_angle = std::acos(std::max(-1.f, std::min(1.f, cos_min)));
+  return true;
+}
+
 bool AreaLight::sample(const LightSampleContext& ctx, const Vec2f& u_in, LightSample* out) const {
   // Pick a triangle, reusing the remapped first coordinate for the point.
   float ux = u_in.x;

@@ -62,6 +62,12 @@ class Light {
   virtual bool reflection_only() const { return false; }
   /// Called once per commit with the world bounds of the scene.
   virtual void preprocess(const Bounds3& scene_bounds) {}
+  /// Lights at a place (area, point, spot): a sphere holding the emitter, for choosing lights
+  /// by their distance to the shading point (RenderScene::pick_light). False: no place.
+  virtual bool bounding_sphere(Vec3f* centre, float* radius) const { return false; }
+  /// One-sided emitters: a cone (unit axis, half-angle in radians) holding the normals of the
+  /// sides that emit. False: it emits in every direction.
+  virtual bool normal_cone(Vec3f* axis, float* half_angle) const { return false; }
 };
 
 /// Creates a light plugin (see light_types()) from parameters. Throws sg::Error naming `context`.
@@ -94,6 +100,8 @@ class AreaLight final : public Light {
   float power() const override { return m_power; }
   /// Area pdf of the sampling strategy at a point on triangle `prim` (0 if not emissive).
   float area_pdf(uint32_t prim) const { return prim < m_area_pdf.size() ? m_area_pdf[prim] : 0.f; }
+  bool bounding_sphere(Vec3f* centre, float* radius) const override;
+  bool normal_cone(Vec3f* axis, float* half_angle) const override;
 
  private:
   uint32_t m_inst;

@@ -23,6 +23,12 @@ class PointLight final : public Light {
   float power() const override { return 4.f * k_pi * luminance(m_intensity); }
   bool is_delta() const override { return true; }
 
+  bool bounding_sphere(Vec3f* centre, float* radius) const override {
+    *centre = m_pos;
+    *radius = 0.f;
+    return true;
+  }
+
  private:
   Vec3f m_pos;
   Color m_intensity;

@@ -55,6 +55,12 @@ class SpotLight final : public Light {
     return t * t * (3.f - 2.f * t);
   }
 
+  bool bounding_sphere(Vec3f* centre, float* radius) const override {
+    *centre = m_pos;
+    *radius = 0.f;
+    return true;
+  }
+
  private:
   Vec3f m_pos, m_axis;
   Color m_intensity;

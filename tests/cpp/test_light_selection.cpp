@@ -1,7 +1,12 @@
-// Light selection (api/scene.cpp: RenderScene::light_pick): next-event estimation picks a
-// light with probability proportional to its power() estimate. A scene with a strong and
-// a weak light (and lights of every kind) must pick them in proportion.
+// Light selection (api/scene.cpp, integrator/render_scene.h): next-event estimation picks a
+// light at a shading point by the flux density it brings there (RenderScene::pick_light:
+// power / 4 pi d^2 for lights with a place, power per scene disc for the others); beyond
+// k_max_weighed_lights, by power alone (RenderScene::light_pick). Both are checked: picks in
+// proportion (chi-square), pmf consistent with the choice, near lights preferred.
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
 
 #include <unistd.h>
 
@@ -101,4 +106,120 @@ TEST(light_selection, all_light_kinds_share_one_scale) {
   EXPECT_NEAR(rs.lights[2]->power() / (k_pi_d * r2 * 20.0), 1.0, 1e-5);
   EXPECT_NEAR(rs.lights[3]->power() / (k_pi_d * r2 * 4.0 * k_pi_d * 0.5), 1.0, 1e-5);
   EXPECT_NEAR(rs.lights[0]->power() / (4.0 * k_pi_d * 5.0), 1.0, 1e-5);
+}
+
+namespace {
+
+/// pick_light at p against the flux-density weights (chi-square), and light_pmf against the
+/// pmf pick_light returns.
+void expect_weighted_picks(const RenderScene& rs, const Vec3f& p, uint64_t seed) {
+  const size_t n_l = rs.lights.size();
+  std::vector<double> w(n_l);
+  double total = 0.0;
+  for (size_t i = 0; i < n_l; ++i) {
+    const auto& lw = rs.light_weights[i];
+    Vec3f d = p - lw.centre;
+    double d2 = dot(d, d);
+    w[i] = lw.local ? lw.power / (4.0 * k_pi_d * std::max(d2, double(lw.radius2))) : lw.power;
+    if (lw.oriented && d2 > lw.radius2) {
+      // The emission angle's lower bound: the angle to the cone's axis less its half-angle and
+      // the sphere's angular radius.
+      double theta = std::acos(std::clamp(double(dot(lw.axis, d)) / std::sqrt(d2), -1.0, 1.0)) - lw.cone_angle -
+                     std::asin(std::min(1.0, std::sqrt(double(lw.radius2) / d2)));
+      w[i] *= theta <= 0.0 ? 1.0 : (theta >= 0.5 * k_pi_d ? 0.0 : std::cos(theta));
+    }
+    total += w[i];
+  }
+  double sum = 0.0;
+  for (size_t i = 0; i < n_l; ++i) {
+    EXPECT_NEAR(rs.light_pmf(p, uint32_t(i)), w[i] / total, 1e-6) << "light " << i;
+    sum += rs.light_pmf(p, uint32_t(i));
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-5);
+  const int n = 400000;
+  Pcg32 rng(seed);
+  std::vector<double> obs(n_l, 0.0), exp(n_l);
+  for (int k = 0; k < n; ++k) {
+    float pmf;
+    size_t i = rs.pick_light(p, rng.next_float(), &pmf);
+    ASSERT_LT(i, n_l);
+    EXPECT_FLOAT_EQ(pmf, rs.light_pmf(p, uint32_t(i)));
+    obs[i] += 1.0;
+  }
+  for (size_t i = 0; i < n_l; ++i) exp[i] = n * w[i] / total;
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+}
+
+}  // namespace
+
+// A small lamp next to a sky: by power alone the lamp is (almost) never chosen; weighed by
+// its flux density at the shading point it is chosen near it and rarely far from it.
+TEST(light_selection, lights_are_weighed_by_their_flux_density_at_the_shading_point) {
+  Scene s;
+  TriangleMesh big = ground_quad();
+  for (Vec3f& v : big.positions) v = Vec3f(v.x * 100.f, v.y, v.z * 100.f);  // a 400 m ground
+  s.add_instance(s.add_mesh(big), Transform());
+  ParamSet point;
+  point.set("position", std::vector<double>{0.0, 0.5, 0.0});
+  point.set("intensity", 2.0);
+  ParamSet env;
+  env.set("radiance", 0.05);
+  uint32_t lamp = s.add_light("point", point);
+  uint32_t sky = s.add_light("environment", env);
+  s.commit();
+  const RenderScene& rs = s.render_scene();
+  ASSERT_TRUE(rs.light_weights[lamp].local);
+  ASSERT_FALSE(rs.light_weights[sky].local);
+  // By power the lamp gets a vanishing share; at 0.5 m from it, most picks.
+  EXPECT_LT(rs.light_pick.pmf(lamp), 1e-3);
+  float near = rs.light_pmf(Vec3f(0.f, 0.f, 0.f), lamp), far = rs.light_pmf(Vec3f(30.f, 0.f, 0.f), lamp);
+  EXPECT_GT(near, 0.5f);
+  EXPECT_LT(far, 0.01f);
+  expect_weighted_picks(rs, Vec3f(0.f, 0.f, 0.f), 903);
+  expect_weighted_picks(rs, Vec3f(3.f, 0.f, 1.f), 904);
+}
+
+TEST(light_selection, weighed_picks_of_every_light_kind_are_consistent) {
+  Scene s;
+  s.add_instance(s.add_mesh(ground_quad()), Transform());
+  ParamSet point;
+  point.set("position", std::vector<double>{1.0, 2.0, 0.0});
+  point.set("intensity", 5.0);
+  ParamSet sun;
+  sun.set("direction", std::vector<double>{0.3, 1.0, 0.2});
+  sun.set("irradiance", 20.0);
+  ParamSet env;
+  env.set("radiance", 0.5);
+  ParamSet lamp;
+  lamp.set("radiance", 40.0);
+  s.add_light("point", point);
+  s.add_light("spot", spot(10.0));
+  s.add_light("sun", sun);
+  s.add_light("environment", env);
+  TriangleMesh q = ground_quad();
+  for (Vec3f& v : q.positions) v = Vec3f(v.x * 0.05f, 1.0f, v.z * 0.05f + 1.f);
+  std::swap(q.indices[1], q.indices[2]);
+  std::swap(q.indices[4], q.indices[5]);  // facing down
+  uint32_t mid = s.add_material("emissive", lamp);
+  s.add_instance(s.add_mesh(q), Transform(), 0, std::nullopt, mid);
+  s.commit();
+  const RenderScene& rs = s.render_scene();
+  ASSERT_EQ(rs.lights.size(), 5u);
+  int local = 0;
+  for (const auto& lw : rs.light_weights) local += lw.local;
+  EXPECT_EQ(local, 3);  // point, spot, the emissive quad
+  uint32_t qi = 0;  // the quad's area light (area lights come first)
+  while (qi < rs.lights.size() && !dynamic_cast<const AreaLight*>(rs.lights[qi])) ++qi;
+  ASSERT_LT(qi, rs.lights.size());
+  const auto& quad = rs.light_weights[qi];
+  ASSERT_TRUE(quad.oriented);  // one-sided, facing down
+  EXPECT_NEAR(quad.axis.y, -1.f, 1e-5f);
+  EXPECT_NEAR(quad.cone_angle, 0.f, 1e-3f);
+  // Above the quad it sends nothing: never picked there.
+  EXPECT_EQ(rs.light_pmf(Vec3f(0.f, 3.f, 1.f), qi), 0.f);
+  EXPECT_GT(rs.light_pmf(Vec3f(0.f, 0.f, 1.f), qi), 0.f);
+  expect_weighted_picks(rs, Vec3f(0.f, 0.f, 0.f), 905);
+  expect_weighted_picks(rs, Vec3f(0.1f, 0.9f, 1.f), 906);
+  expect_weighted_picks(rs, Vec3f(0.f, 3.f, 1.f), 907);
 }
