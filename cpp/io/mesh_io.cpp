@@ -340,6 +340,12 @@ ImportedModel import_mesh_file(const std::string& path) {
   if (model.mesh.indices.empty()) throw FileError(path, "all triangles are degenerate (zero area)");
 
   fs::path dir = fs::path(path).parent_path();
+  // AC3D's "emis" is OpenGL fixed-function emission, a constant added to the lit colour of an
+  // unlit-looking game model (TORCS gives every car "emis 0.2"), not a light: read as emission
+  // it made whole car bodies glow and light the ground. AC3D files carry no emitters.
+  std::string lower_ext = fs::path(path).extension().string();
+  for (char& ch : lower_ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  const bool ac3d = lower_ext == ".ac" || lower_ext == ".acc" || lower_ext == ".ac3d";
   for (unsigned i = 0; i < scene->mNumMaterials; ++i) {
     const aiMaterial* am = scene->mMaterials[i];
     ImportedMaterial im;
@@ -349,7 +355,7 @@ ImportedModel import_mesh_file(const std::string& path) {
     bool has_base = am->Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS;
     if (has_base || am->Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS) im.base_color = Color(c.r, c.g, c.b);
     aiColor3D e;
-    if (am->Get(AI_MATKEY_COLOR_EMISSIVE, e) == AI_SUCCESS) im.emission = Color(e.r, e.g, e.b);
+    if (!ac3d && am->Get(AI_MATKEY_COLOR_EMISSIVE, e) == AI_SUCCESS) im.emission = Color(e.r, e.g, e.b);
     // Resolves texture slot (type, index) into `out`; false when the slot is empty.
     auto get_texture = [&](aiTextureType type, unsigned index, ImportedTexture* out) {
       aiString tex;

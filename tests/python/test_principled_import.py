@@ -196,3 +196,23 @@ def test_obj_mtl_specular_shininess_and_opacity(tmp_path):
     assert shiny["specular"] == pytest.approx(1.0)  # F0 = min(lum(Ks), 0.08) = 0.08
     assert shiny["alpha_mode"] == "blend" and shiny["alpha_factor"] == pytest.approx(0.3)
     assert sum(i["type"] == "principled" for i in infos) == 1
+
+
+@pytest.mark.parametrize("ext, emits", [(".ac", False), (".obj", True)])
+def test_ac3d_emis_is_not_a_light(tmp_path, ext, emits):
+    """AC3D's "emis" (OpenGL fixed-function emission: TORCS gives every car 0.2) is not read
+    as emission -- it made whole car bodies glow -- while an OBJ's Ke still is."""
+    if ext == ".ac":
+        (tmp_path / "m.ac").write_text(
+            "AC3Db\nMATERIAL \"body\" rgb 0.8 0.8 0.8 amb 1 1 1 emis 0.2 0.2 0.2 spec 0.5 0.5 0.5 shi 50 trans 0\n"
+            "OBJECT world\nkids 1\nOBJECT poly\nname \"tri\"\nnumvert 3\n-1 -1 3\n1 -1 3\n0 1 3\nnumsurf 1\nSURF 0x10\n"
+            "mat 0\nrefs 3\n0 0 0\n1 0 0\n2 0 0\nkids 0\n")
+    else:
+        (tmp_path / "m.mtl").write_text("newmtl body\nKd 0.8 0.8 0.8\nKe 0.2 0.2 0.2\n")
+        (tmp_path / "m.obj").write_text("mtllib m.mtl\nv -1 -1 3\nv 1 -1 3\nv 0 1 3\nusemtl body\nf 1 2 3\n")
+    s = sg.Scene()
+    res = s.load_mesh_file(str(tmp_path / f"m{ext}"))
+    infos = [s.material_info(m) for m in res["material_ids"]]
+    glows = any(i["type"] == "emissive" or any(k.startswith("emission") and v not in (0, 0.0, [0.0, 0.0, 0.0])
+                                               for k, v in i["params"].items()) for i in infos)
+    assert glows == emits, infos
