@@ -204,7 +204,7 @@ def _car_views(tmp_path, effect, params, distance, elevation, azimuths):
 
     def render(name, wear):
         d = tmp_path / name
-        d.mkdir()
+        d.mkdir(parents=True)
         (d / "s.yaml").write_text(f"""
 seed: 5
 resolution: [320, 240]
@@ -281,13 +281,10 @@ def _distance_to_segments(p, seg, chunk=4096):
     return out
 
 
-RUST = "{amount: 0.1, bottom_bias: 0}"
-
-
-def test_rust_starts_at_the_edges_of_a_library_car(tmp_path):
-    """Rust on a library car, measured on its renders from four sides (albedo labels against the
-    clean car): within 2 cm of the mesh's sharp edges (borders, and faces meeting at over 35
-    degrees) it covers at least twice what it covers on open panels (over 10 cm from them)."""
+def _near_edges_and_open(tmp_path, effect, params):
+    """Fractions of the library car's pixels the wear ``effect`` changed (albedo labels against
+    the clean car, four sides): within 2 cm of the mesh's sharp edges (borders, and faces meeting
+    at over 35 degrees), and on open panels (over 10 cm from them)."""
     from synthgen.frame.resources import Shapes
     from synthgen.scene import assets
 
@@ -298,17 +295,37 @@ def test_rust_starts_at_the_edges_of_a_library_car(tmp_path):
     seg = _crease_edges(np.asarray(arrays["positions"], np.float64), np.asarray(arrays["indices"], np.int64))
     unit = float(assets.entry(CAR).get("scale", 1.0))
     near, open_ = [], []
-    for meta, c1, c0, world in _car_views(tmp_path, "rust", RUST, 8, 20, (30, 120, 210, 300)):
+    for meta, c1, c0, world in _car_views(tmp_path, effect, params, 8, 20, (30, 120, 210, 300)):
         obj = np.linalg.inv(np.asarray(meta["objects"][0]["world_from_object"])) @ world
         dist = _distance_to_segments(obj[:3].T, seg) * unit  # metres
-        rust = np.abs(c1 - c0).max(axis=1) > 0.05
-        near.append(rust[dist < 0.02])
-        open_.append(rust[dist > 0.10])
+        worn = np.abs(c1 - c0).max(axis=1) > 0.05
+        near.append(worn[dist < 0.02])
+        open_.append(worn[dist > 0.10])
     near, open_ = np.concatenate(near), np.concatenate(open_)
+    assert near.size > 500 and open_.size > 500
+    return near, open_
+
+
+def test_rust_starts_at_the_edges_of_a_library_car(tmp_path):
+    """Rust on a library car: within 2 cm of the mesh's sharp edges it covers at least twice
+    what it covers on open panels (over 10 cm from them)."""
+    near, open_ = _near_edges_and_open(tmp_path, "rust", "{amount: 0.1, bottom_bias: 0}")
     print(f"\nrust within 2 cm of sharp edges: {near.mean():.3f} of {near.size} px; on open panels (over 10 cm "
           f"from them): {open_.mean():.3f} of {open_.size} px")
-    assert near.size > 500 and open_.size > 500
     assert near.mean() >= 2.0 * open_.mean()
+
+
+def test_scratch_clusters_gather_at_the_edges_of_a_library_car(tmp_path):
+    """Scratches in clusters (amount < 1) on a library car gather at its edges and handles: near
+    its sharp edges they cover at least 1.5x what they cover on open panels, and without the
+    edge term (edges: 0) they do not."""
+    params = "{amount: 0.25, density: 4, width: 0.12}"
+    near, open_ = _near_edges_and_open(tmp_path / "edges", "scratches", params)
+    near0, open0 = _near_edges_and_open(tmp_path / "anywhere", "scratches", params[:-1] + ", edges: 0}")
+    print(f"\nscratched within 2 cm of sharp edges / on open panels: {near.mean():.3f} / {open_.mean():.3f} "
+          f"(edges: 0: {near0.mean():.3f} / {open0.mean():.3f})")
+    assert near.mean() >= 1.5 * open_.mean()
+    assert near0.mean() < 1.5 * open0.mean()
 
 
 def test_the_car_row_shows_every_effect_on_the_library_car():
@@ -326,3 +343,30 @@ def test_the_car_row_shows_every_effect_on_the_library_car():
         # The car is a third of the width: a part of the tile changes, clearly.
         changed = (np.abs(t - tiles[0]).max(axis=2) > 0.02).mean()
         assert changed > 0.002, (name, changed)
+
+
+def test_rust_creeps_out_from_the_scratches():
+    """Rust given the scratches' lines (the wear randomizer passes them when an instance gets
+    both) covers the scratched paint and a halo around it far more than the rest: measured on a
+    plane through the object, against the same rust without the scratches."""
+    n = 400
+    ys, xs = np.mgrid[0:n, 0:n] / n
+    pts = np.stack([xs.ravel(), ys.ravel(), np.full(n * n, 0.5)], 1).astype(np.float32)
+    lines = wear.scratch_lines(seed=3, density=8.0, width=0.04)
+    s = sg.Scene()
+    on_line = s.texture_values(wear._lines_texture(s, lines), pts)[:, 0] > 0.0
+
+    def coverage(**kw):
+        m = wear.rust(s, s.add_material("diffuse", {}), seed=2, amount=0.15, bottom_bias=0.0, streaks=0.0,
+                      edges=0.0, **kw)
+        v = s.texture_values(_mask_texture(s, m), pts)[:, 0] > 0.5
+        return v[on_line].mean(), v[~on_line].mean()
+
+    with_lines, without = coverage(scratch_lines=lines), coverage()
+    print(f"\nrust on scratch lines / elsewhere: with the scratches {with_lines[0]:.3f} / {with_lines[1]:.3f}, "
+          f"without {without[0]:.3f} / {without[1]:.3f}; scratched {on_line.mean():.3f} of the plane")
+    assert 0.01 < on_line.mean() < 0.3
+    assert with_lines[0] >= 3.0 * with_lines[1]
+    assert without[0] < 1.5 * without[1]  # the noise alone does not follow the lines
+    off = coverage(scratch_lines=lines, from_scratches=0.0)
+    assert off == pytest.approx(without)

@@ -38,8 +38,10 @@ SCHEMA = Record({
         "edges": R(Number(1.0, min=0.0, max=4.0, doc="rust starting at convex edges and sheet borders (0: none)")),
         "edge_radius": R(Number(0.03, min=0.0001, max=1.0, doc="how sharp an edge must be, metres (edges sharper "
                                                                "than about 0.75 of it count)")),
-        "streaks": R(Number(0.5, min=0.0, max=4.0, doc="rust running down in vertical streaks (0: none)"))},
-        "rust with relief, starting at edges, more towards the bottom, running down in streaks "
+        "streaks": R(Number(0.5, min=0.0, max=4.0, doc="rust running down in vertical streaks (0: none)")),
+        "from_scratches": R(Number(1.0, min=0.0, max=4.0, doc="rust creeping out from the scratches, when the "
+                                                              "instance also gets scratches (0: none)"))},
+        "rust with relief, starting at edges and scratches, more towards the bottom, running down in streaks "
         "(synthgen.scene.wear.rust)"),
     "dirt": _wear_effect(0.4, {
         "scale": R(Number(5.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
@@ -70,7 +72,10 @@ SCHEMA = Record({
         "style": R(Choice(["strokes", "swirl", "cells"], "strokes",
                           doc="strokes: straight strokes of random length and depth; swirl: polishing arcs; cells: "
                               "the edges of a cellular pattern")),
-        "spread": R(Number(12.0, min=0.0, max=90.0, doc="angular spread of directed strokes, degrees"))},
+        "spread": R(Number(12.0, min=0.0, max=90.0, doc="angular spread of directed strokes, degrees")),
+        "edges": R(Number(1.0, min=0.0, max=4.0, doc="with amount < 1: the scratched clusters gather at convex edges "
+                                                     "and borders -- door edges, handles, bumper corners (0: anywhere)")),
+        "edge_radius": R(Number(0.03, min=0.0001, max=1.0, doc="how sharp an edge must be, metres"))},
         "scratches through the paint down to bare metal (synthgen.scene.wear.scratches)"),
     "ice": _wear_effect(0.5, {
         "scale": R(Number(4.0, min=0.001, max=1000.0, doc=_SCALE_DOC)),
@@ -90,8 +95,9 @@ class Wear(Randomizer):
 
     def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
         rng = ctx.rng
-        applied: Dict[str, Any] = {}
-        mats = list(materials)
+        # Which effects the instance gets, with their parameters and seeds (drawn in the
+        # effects' order), then applied: rust needs to know the scratches it creeps out from.
+        chosen: Dict[str, Dict[str, Any]] = {}
         for effect in EFFECTS:
             spec = value.get(effect)
             if spec is None:
@@ -103,9 +109,19 @@ class Wear(Randomizer):
                 kw["colors"] = sorted((float(c["position"]), tuple(float(x) for x in c["color"])) for c in kw["colors"])
             seed = spec.get("seed")
             kw["seed"] = int(seed) if seed is not None else int(rng.integers(0, 1 << 31))
-            mats = getattr(wear, effect)(ctx.scene, mats, **kw)
-            applied[effect] = kw
-        return mats, applied
+            chosen[effect] = kw
+        mats = list(materials)
+        for effect, kw in chosen.items():
+            extra: Dict[str, Any] = {}
+            if effect == "rust" and "scratches" in chosen:
+                sc = chosen["scratches"]
+                extra["scratch_lines"] = wear.scratch_lines(**{k: sc[k] for k in LINE_KEYS if k in sc})
+            mats = getattr(wear, effect)(ctx.scene, mats, **kw, **extra)
+        return mats, chosen
+
+
+#: The scratches' parameters that shape their lines (:func:`synthgen.scene.wear.scratch_lines`).
+LINE_KEYS = ("seed", "density", "width", "direction", "elongation", "style", "spread")
 
 
 register(Wear())

@@ -19,13 +19,13 @@ relative mapping, per metre for object/world); roughness in [0, 1]; bump heights
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Optional, Sequence, Union
+from typing import Any, Dict, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
 from .._core import Scene, SynthgenError, TextureRef
 
-__all__ = ["rust", "scratches", "ice", "dirt", "decal", "RUST_COLORS"]
+__all__ = ["rust", "scratches", "scratch_lines", "ice", "dirt", "decal", "RUST_COLORS"]
 
 #: Colour ramp of rust (linear RGB): dark brown to orange (the seed's rust colour map).
 RUST_COLORS = ((0.0, (0.05, 0.02, 0.01)), (0.35, (0.16, 0.05, 0.015)), (0.7, (0.42, 0.14, 0.03)),
@@ -90,13 +90,17 @@ def _mix(scene: Scene, base: Base, wear: int, mask: int, stochastic: bool = Fals
 def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale: float = 3.0,
          bottom_bias: float = 0.6, roughness: float = 0.85, bump: float = 0.002,
          colors: Sequence = RUST_COLORS, edges: float = 1.0, edge_radius: float = 0.03,
-         streaks: float = 0.5) -> Any:
+         streaks: float = 0.5, from_scratches: float = 1.0,
+         scratch_lines: Optional[Mapping[str, Any]] = None) -> Any:
     """Rust over ``base``, as it grows on painted steel: it starts at convex edges and sheet
     borders, where paint is thinnest and chips first (the ``edges`` texture: short rays along
     the surface, ``edge_radius`` metres; weight ``edges``), spreads as an fBm front in
     relative-local coordinates (``scale`` features across the object), more towards the bottom
     (``bottom_bias``: 0 = none, 1 = strong), and runs down in vertical streaks (noise stretched
-    along the object's height, weight ``streaks``), covering ``amount`` of the object; the rust
+    along the object's height, weight ``streaks``), creeps out from scratches through the paint
+    (``scratch_lines``: the :func:`scratch_lines` parameters of the scratches the object also
+    gets -- the rust then follows those strokes, a halo four times their width, weight
+    ``from_scratches``), covering ``amount`` of the object; the rust
     has a colour-ramp fBm and a turbulence bump of ``bump`` metres: Lambertian for ``roughness``
     >= 0.8 (the default 0.85), else a principled material of that roughness."""
     amount = _check("amount", amount, 0.0, 1.0)
@@ -107,6 +111,7 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
     edges = _check("edges", edges, 0.0, 4.0)
     _check("edge_radius", edge_radius, 1e-4, 1.0)
     streaks = _check("streaks", streaks, 0.0, 4.0)
+    from_scratches = _check("from_scratches", from_scratches, 0.0, 4.0)
     # Octave counts: the mask's shape is large-scale (4 octaves), colour and bump carry the
     # fine detail (4 and 3 octaves); each octave costs one noise evaluation per lookup.
     noise = scene.add_texture("noise", {"pattern": "fbm", "octaves": 4, "mapping": "relative", "scale": float(scale),
@@ -124,6 +129,16 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
         edge = scene.add_texture("edges", {"radius": float(edge_radius), "samples": 8})
         raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(edge), "op": "add",
                "factor": edges * 1.5}
+    if scratch_lines is not None and from_scratches > 0.0:
+        # Paint scratched to the steel rusts there first, and the rust creeps under the paint
+        # on either side: the scratches' own strokes, four times as wide (a strokes texture's
+        # profile is 1 on the centre line, so the halo is densest at the scratch).
+        halo = dict(scratch_lines, width=min(0.5, 4.0 * float(scratch_lines["width"])))
+        if halo["texture"] == "cellular":
+            halo["remap"] = [0.0, halo["width"]]
+        creep = _lines_texture(scene, halo)
+        raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(creep), "op": "add",
+               "factor": from_scratches * 1.5}
     mask = _mask(scene, raw, amount, 0.04)
     color = scene.add_texture("noise", dict({"pattern": "fbm", "octaves": 4, "mapping": "object", "scale": 12.0,
                                              "seed": int(seed) + 1, "remap": [-0.6, 0.6]}, **_ramp(colors)))
@@ -141,10 +156,45 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
     return _mix(scene, base, wear, mask, stochastic=True)
 
 
+def scratch_lines(*, seed: int = 0, density: float = 8.0, width: float = 0.04, direction: Optional[str] = None,
+                  elongation: float = 8.0, style: str = "strokes", spread: float = 12.0) -> Dict[str, Any]:
+    """The texture of scratches' lines: ``{"texture": plugin, **its parameters}`` (see
+    :func:`scratches`; :func:`rust` takes it to creep out from the same strokes)."""
+    if style not in ("strokes", "swirl", "cells"):
+        raise SynthgenError(f"wear: 'style' must be strokes, swirl or cells, got {style!r}")
+    axis = None
+    if direction is not None:
+        axis = {"x": 0, "y": 1, "z": 2}.get(str(direction))
+        if axis is None:
+            raise SynthgenError(f"wear: 'direction' must be x, y or z, got {direction!r}")
+    if style == "cells":
+        sc = [float(density)] * 3
+        if axis is not None:
+            sc[axis] = float(density) / float(elongation)
+        return {"texture": "cellular", "output": "f2_minus_f1", "mapping": "object", "scale": sc, "seed": int(seed),
+                "remap": [0.0, width], "invert": True, "smooth": True, "width": float(width)}
+    params: Dict[str, Any] = {"texture": "strokes", "mode": "straight" if style == "strokes" else "swirl",
+                              "mapping": "object", "scale": float(density), "seed": int(seed),
+                              "width": min(0.5, float(width)), "density": 4}
+    if style == "strokes":
+        longest = min(2.0, max(0.1, float(elongation) / 8.0))
+        params.update(length=[0.3 * longest, longest], spread=float(spread))
+        if axis is not None:
+            params["direction"] = [1.0 if i == axis else 0.0 for i in range(3)]
+    return params
+
+
+def _lines_texture(scene: Scene, params: Mapping[str, Any]) -> int:
+    p = {k: v for k, v in params.items() if k != "texture"}
+    if params["texture"] == "cellular":
+        p.pop("width")
+    return scene.add_texture(str(params["texture"]), p)
+
+
 def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
               amount: float = 1.0, direction: Optional[Sequence[float]] = None, elongation: float = 8.0,
               metal: str = "aluminium", roughness: float = 0.35, depth: float = 0.0, style: str = "strokes",
-              spread: float = 12.0) -> Any:
+              spread: float = 12.0, edges: float = 1.0, edge_radius: float = 0.03) -> Any:
     """Scratches through ``base`` down to bare metal, ``density`` cells per metre (object
     mapping), lines ``width`` of a cell wide. ``style``:
 
@@ -157,7 +207,9 @@ def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, 
     - ``cells``: the former look, the edges of a cellular pattern (F2 - F1 below ``width``),
       stretched ``elongation`` times along ``direction``.
 
-    ``amount`` < 1 keeps only a noise-selected part (scratches come in clusters). The scratch
+    ``amount`` < 1 keeps only a part, in clusters: where a noise plus ``edges`` times the
+    ``edges`` texture (convex edges and borders within ``edge_radius`` metres: door edges,
+    handles, bumper corners -- where keys, rings and stones hit) is highest. The scratch
     material is a rough ``metal`` conductor (changes albedo and roughness); with ``depth`` > 0
     (metres, [0, 0.01]) its shading normal follows the walls of a groove that deep (a bump map
     of the line profile)."""
@@ -168,35 +220,19 @@ def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, 
     _check("roughness", roughness, 0.0, 1.0)
     depth = _check("depth", depth, 0.0, 0.01)
     spread = _check("spread", spread, 0.0, 90.0)
-    if style not in ("strokes", "swirl", "cells"):
-        raise SynthgenError(f"wear: 'style' must be strokes, swirl or cells, got {style!r}")
-    axis = None
-    if direction is not None:
-        axis = {"x": 0, "y": 1, "z": 2}.get(str(direction))
-        if axis is None:
-            raise SynthgenError(f"wear: 'direction' must be x, y or z, got {direction!r}")
-    if style == "cells":
-        sc = [float(density)] * 3
-        if axis is not None:
-            sc[axis] = float(density) / float(elongation)
-        lines = scene.add_texture("cellular", {"output": "f2_minus_f1", "mapping": "object", "scale": sc,
-                                               "seed": int(seed), "remap": [0.0, width], "invert": True,
-                                               "smooth": True})
-    else:
-        params: Dict[str, Any] = {"mode": "straight" if style == "strokes" else "swirl", "mapping": "object",
-                                  "scale": float(density), "seed": int(seed), "width": min(0.5, float(width)),
-                                  "density": 4}
-        if style == "strokes":
-            longest = min(2.0, max(0.1, float(elongation) / 8.0))
-            params.update(length=[0.3 * longest, longest], spread=float(spread))
-            if axis is not None:
-                params["direction"] = [1.0 if i == axis else 0.0 for i in range(3)]
-        lines = scene.add_texture("strokes", params)
+    edges = _check("edges", edges, 0.0, 4.0)
+    _check("edge_radius", edge_radius, 1e-4, 1.0)
+    lines = _lines_texture(scene, scratch_lines(seed=seed, density=density, width=width, direction=direction,
+                                                elongation=elongation, style=style, spread=spread))
     mask = lines
     if amount < 1.0:
         sel = scene.add_texture("noise", {"pattern": "fbm", "mapping": "object", "scale": float(density) / 4.0,
                                           "seed": int(seed) + 7})
-        keep = _mask(scene, {"a": TextureRef(sel), "b": 0.0, "op": "add"}, amount, 0.02)
+        raw: Dict[str, Any] = {"a": TextureRef(sel), "b": 0.0, "op": "add"}
+        if edges > 0.0:
+            edge = scene.add_texture("edges", {"radius": float(edge_radius), "samples": 8})
+            raw = {"a": TextureRef(sel), "b": TextureRef(edge), "op": "add", "factor": edges}
+        keep = _mask(scene, raw, amount, 0.02)
         mask = scene.add_texture("blend", {"a": TextureRef(lines), "b": TextureRef(keep), "op": "multiply",
                                            "factor": 1.0})
     mparams: Dict[str, Any] = {"metal": metal, "roughness": float(roughness)}
