@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """docs/vehicles.png: a strip of four frames of scenarios/vehicles.yaml (library vehicles with
-plates, paint and road dirt on a two-lane road) at half size, as `synthgen run` renders them.
+plates, paint and road dirt on a two-lane road) at half size, as `synthgen run` renders them;
+with --scenario scenarios/vehicles_night.yaml, docs/vehicles_night.png (the same at night, lit
+by the vehicles' lamps and street lamps).
 
-    .venv/bin/python tools/make_vehicles_figure.py [--frames 0,1,2,3] [-o docs/vehicles.png]
+    .venv/bin/python tools/make_vehicles_figure.py [--scenario S] [--frames 0,1,2,3] [-o PNG]
 """
 from __future__ import annotations
 
@@ -22,10 +24,13 @@ def main(argv=None) -> int:
     from synthgen.scenario import check_inputs, load_scenario
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scenario", default=os.path.join(REPO, "scenarios", "vehicles.yaml"))
     ap.add_argument("--frames", default="0,1,2,3")
-    ap.add_argument("-o", "--output", default=os.path.join(REPO, "docs", "vehicles.png"))
+    ap.add_argument("-o", "--output", default=None, help="default: docs/<scenario name>.png")
     args = ap.parse_args(argv)
-    sc = load_scenario(os.path.join(REPO, "scenarios", "vehicles.yaml"))
+    if args.output is None:
+        args.output = os.path.join(REPO, "docs", os.path.splitext(os.path.basename(args.scenario))[0] + ".png")
+    sc = load_scenario(args.scenario)
     check_inputs(sc)
     fr = FrameRenderer(sc)
     tiles = []

@@ -95,3 +95,56 @@ outputs: [rgb]
 """)
     s = runner.run(str(scen), str(tmp_path / "ds"), count=1, progress=False)
     assert s["failures"] and "declares no plate mounts" in s.text()
+
+
+def test_plate_only_boxes_are_labels_of_their_own_class(tmp_path):
+    """``plates: {class: plate}``: the visible plate becomes a label of its own class in COCO,
+    YOLO and KITTI: its pixels (exact: pixel centres inside the plate whose first hit is the
+    plate) lie on the vehicle, fill the projected plate when nothing hides it, and its boxes
+    in the three formats are the metadata's."""
+    from synthgen.outputs.coco import rle_decode
+    from synthgen.outputs.kitti import parse_kitti
+    from synthgen.outputs.yolo import parse_yolo
+
+    _asset(CAR)
+    scen = tmp_path / "s.yaml"
+    scen.write_text(f"""
+seed: 3
+resolution: [480, 360]
+camera: {{fov_y: 14, pose: {{type: orbit, target: [0, 0.6, 0], distance: 10, elevation: 6, azimuth: 255}}}}
+lights: [{{type: sky, elevation: 45, azimuth: 120, turbidity: 3, strength: 0.02}}]
+objects: [{{class: car, asset: {CAR}, yaw: 0, plates: {{country: de, class: plate}}}}]
+placement: {{region: [-0.01, -0.01, 0.01, 0.01]}}
+render: {{spp: 4, max_depth: 2}}
+outputs: [rgb, instance, depth, coco, yolo, kitti]
+""")
+    out = str(tmp_path / "ds")
+    s = runner.run(str(scen), out, count=1, progress=False)
+    assert not s["failures"], s.text()
+    meta = json.load(open(os.path.join(out, "meta", "000000.json")))
+    assert meta["class_names"] == ["car", "plate"]
+    parts = meta["parts"]
+    assert [p["mount"] for p in parts] == ["rear"]  # the front plate faces away
+    p = parts[0]
+    mask = rle_decode(p["mask"])
+    ids = oiio.ImageBuf(os.path.join(out, "instance", "000000.png")).get_pixels(oiio.UINT16)[..., 0]
+    assert mask.sum() == p["visible_pixels"] > 200
+    assert (ids[mask] == meta["objects"][0]["instance_id"]).all()
+    ys, xs = np.mgrid[0:mask.shape[0], 0:mask.shape[1]] + 0.5
+    quad = _inside(p["corners"], xs, ys)
+    assert not (mask & ~quad).any()
+    print(f"\nplate: {mask.sum()} visible px of {quad.sum()} inside its projection")
+    assert mask.sum() >= 0.97 * quad.sum()
+    x, y, w, h = p["bbox"]
+    coco = json.load(open(os.path.join(out, "annotations", "coco.json")))
+    assert [c["name"] for c in coco["categories"]] == ["car", "plate"]
+    plate_anns = [a for a in coco["annotations"] if a["category_id"] == 2]
+    assert len(plate_anns) == 1 and plate_anns[0]["bbox"] == [x, y, w, h] and plate_anns[0]["area"] == mask.sum()
+    yolo = parse_yolo(open(os.path.join(out, "labels", "000000.txt")).read(), 480, 360)
+    assert [c for c, _ in yolo] == [0, 1]
+    np.testing.assert_allclose(yolo[1][1], [x, y, w, h], atol=0.01)
+    kitti = parse_kitti(open(os.path.join(out, "kitti", "000000.txt")).read())
+    plate = [o for o in kitti if o["type"] == "plate"]
+    assert len(plate) == 1
+    np.testing.assert_allclose(plate[0]["bbox"], [x, y, w, h], atol=0.01)
+    np.testing.assert_allclose(plate[0]["dimensions"], [0.112, 0.52, 0.005], atol=0.006)  # KITTI: 2 decimals

@@ -278,6 +278,20 @@ class FrameRenderer:
 
                 rec["plates"] = dict(rec["plates"], image=project_plates(
                     rec["plates"], objects[k].shape.plates, objects[k].world, camera, arrays.get("depth")))
+                cls = rec["plates"].get("class")
+                if cls and rec.get("visible_pixels"):
+                    from ..randomize.plates import plate_parts
+
+                    # Plate-only labels: the plates as objects of their own class.
+                    meta.setdefault("parts", []).extend(plate_parts(
+                        rec["plates"], objects[k].shape.plates, objects[k].world, camera,
+                        arrays["depth"], arrays["instance_id"], rec, cls, sc.class_names.index(cls) + 1,
+                        np.asarray(meta["kitti_frame"]["level_from_world"])))
+            if keep[k] and "lamps" in rec and objects[k].shape.lamps:
+                from ..randomize.lamps import project_lamps
+
+                rec["lamps"] = dict(rec["lamps"], image=project_lamps(
+                    rec["lamps"], objects[k].shape.lamps, objects[k].world, camera, arrays.get("depth")))
         if fp is None and photo_meta is not None:
             meta["background"] = photo_meta
         if fp is not None:
@@ -380,7 +394,9 @@ class FrameRenderer:
                                       up=AXES[(o.up or shape.up or "+y") if model else "+y"],
                                       plates=shape.plates if model else None,
                                       plate_material=shape.plate_material if model else None,
-                                      roles=shape.roles if model else None)
+                                      roles=shape.roles if model else None,
+                                      lamps=shape.lamps if model else None,
+                                      lamp_material=shape.lamp_material if model else None)
         done = {}
         for r in randomize.randomizers(by="apply_order"):
             value = o.randomizers.get(r.key)

@@ -40,6 +40,10 @@ class Shape:
         #: material of each one's quad (None: no plates).
         self.plates: Dict[str, np.ndarray] = {}
         self.plate_material: Optional[Dict[str, int]] = None
+        #: A vehicle's lamps (name -> {kind, side, centre, corners, normal} in mesh coordinates:
+        #: synthgen.scene.vehicles.lamp_lenses) and each lens's placeholder material (an unlit lens).
+        self.lamps: Dict[str, Dict[str, Any]] = {}
+        self.lamp_material: Optional[Dict[str, int]] = None
         #: Material ids of the model by the role its entry gives them ("paint": [...]).
         self.roles: Dict[str, List[int]] = {}
 
@@ -87,7 +91,7 @@ class Shapes:
             r = scene.load_mesh_file(path)
             mesh_id = r["mesh_id"]
             arrays = scene.mesh_arrays(mesh_id)
-            plates, plate_material, roles = {}, None, {}
+            plates, plate_material, roles, lamps, lamp_material = {}, None, {}, {}, None
             if kind == "asset" and entry.get("materials"):
                 # Materials by role (the entry names them): glass, chrome, rubber, trim replaced by
                 # materials that read as such; paint kept, and recorded for the paint randomizer.
@@ -104,10 +108,10 @@ class Shapes:
                         remap[int(by_name[name])] = self._role(role, role_material)
                 mids = np.asarray(arrays["material_ids"], np.int32)
                 arrays = dict(arrays, material_ids=np.array([remap.get(int(m), int(m)) for m in mids], np.int32))
-                if "wheels" not in entry and "plates" not in entry:
+                if not any(k in entry for k in ("wheels", "plates", "lamps")):
                     mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays.get("normals"),
                                              uvs=arrays.get("uvs"), material_ids=arrays["material_ids"], name=value)
-            if kind == "asset" and ("wheels" in entry or "plates" in entry):
+            if kind == "asset" and any(k in entry for k in ("wheels", "plates", "lamps")):
                 # A vehicle whose wheels or plate mounts the library entry describes: one mesh
                 # with them (the plates with a placeholder material: a blank plate).
                 from ..scene.vehicles import build_vehicle
@@ -116,12 +120,18 @@ class Shapes:
                 rim = scene.add_material("conductor", {"metal": "aluminium", "roughness": 0.3})
                 if entry.get("plates"):  # one placeholder per mount: a blank plate
                     plate_material = {m: scene.add_material("diffuse", {"albedo": 0.75}) for m in entry["plates"]}
+                if entry.get("lamps"):  # one placeholder per lamp: its unlit lens
+                    from ..scene.vehicles import LAMP_KINDS, lamp_names
+
+                    lamp_material = {name: scene.add_material("coated", {"albedo": list(LAMP_KINDS[k]["lens"]),
+                                                                          "roughness": 0.05, "specular": 0.5})
+                                     for name, k, _ in lamp_names(entry)}
                 mids = np.asarray(arrays["material_ids"])
                 if mids.size == 0 or (mids < 0).any():
                     arrays = dict(arrays, material_ids=np.where(mids < 0, self._grey(), mids) if mids.size else
                                   np.full(len(arrays["indices"]), self._grey(), np.int32))
-                built = build_vehicle(arrays, entry, unit, tyre, rim, plate_material)
-                plates, arrays = built.pop("plates"), built
+                built = build_vehicle(arrays, entry, unit, tyre, rim, plate_material, lamp_material)
+                plates, lamps, arrays = built.pop("plates"), built.pop("lamps"), built
                 mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays["normals"],
                                          uvs=arrays["uvs"], material_ids=arrays["material_ids"], name=value)
             pos = np.asarray(arrays["positions"], np.float64)
@@ -129,6 +139,7 @@ class Shapes:
             distinct = tuple(int(i) for i in np.unique(ids)) if ids.size else (-1,)
             shape = Shape(mesh_id, pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
             shape.plates, shape.plate_material, shape.roles = plates, plate_material, roles
+            shape.lamps, shape.lamp_material = lamps, lamp_material
             return shape
         if kind == "primitive":
             # Unit shapes (1 m across, centred), sized per object by scaling.

@@ -221,6 +221,13 @@ def frame_annotations(meta: Mapping[str, Any], instance_id: np.ndarray) -> List[
                                    "truncation": o["truncation"], "source": "synthetic"})
         if a is not None:
             anns.append(a)
+    for p in meta.get("parts", []):  # plate-only labels: their exact visible masks
+        m = rle_decode(p["mask"])
+        a = coco_annotation(1, int(meta["frame"]), int(p["class_id"]), m,
+                            extra={"parent_instance_id": p["parent_instance_id"], "occlusion": 1.0 - p["visible_fraction"],
+                                   "truncation": p["truncation"], "source": "synthetic"})
+        if a is not None:
+            anns.append(a)
     return anns + real_annotations(meta, len(meta.get("class_names", [])))
 
 

@@ -71,7 +71,7 @@ def write_kitti(path: str, frame: Frame) -> str:
     lines = [kitti_line(o["class"], o["bbox"], truncated=o["truncation"],
                         occluded=kitti_occlusion_level(o["visible_fraction"]), alpha=o["alpha"],
                         dimensions=o["dimensions_hwl"], location=o["location_camera"],
-                        rotation_y=o["rotation_y"]) for o in frame.visible_objects()]
+                        rotation_y=o["rotation_y"]) for o in list(frame.visible_objects()) + frame.parts()]
     # A photo's real objects (their 3D box unknown: KITTI's -1 / -1000 / -10) and its ignore
     # regions as DontCare.
     for o in frame.real_objects():

@@ -48,6 +48,11 @@ class Frame:
         """Objects that were kept and have visible pixels, in frame order."""
         return [o for o in self.meta["objects"] if not o.get("dropped") and o.get("visible_pixels")]
 
+    def parts(self) -> List[Mapping[str, Any]]:
+        """Labelled parts of the frame's objects with visible pixels (plate-only boxes:
+        ``plates: {class: ...}``), each with its own class, box, mask and 3D box."""
+        return [p for p in self.meta.get("parts", []) if p.get("visible_pixels")]
+
     def real_objects(self) -> List[Mapping[str, Any]]:
         """Labelled real objects of a photo frame (``background``), in the photo's order."""
         return [o for o in self.meta.get("real_objects", []) if not o["ignore"]]

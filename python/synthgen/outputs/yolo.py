@@ -42,7 +42,7 @@ def parse_yolo(text: str, width: int, height: int) -> List[Tuple[int, List[float
 
 def write_yolo(path: str, frame: Frame) -> str:
     w, h = frame.size
-    lines = [yolo_line(o["class_id"] - 1, o["bbox"], w, h) for o in frame.visible_objects()]
+    lines = [yolo_line(o["class_id"] - 1, o["bbox"], w, h) for o in list(frame.visible_objects()) + frame.parts()]
     # A photo's real objects follow (YOLO has no ignore regions: they are in COCO, KITTI, meta).
     lines += [yolo_line(o["class_id"] - 1, xyxy_to_xywh(o["bbox"]), w, h) for o in frame.real_objects()]
     return write_text(path, "".join(line + "\n" for line in lines))

@@ -57,6 +57,10 @@ class ObjectContext:
     #: material of each one's quad (None: the model has no plate mounts).
     plates: Optional[Dict[str, np.ndarray]] = None
     plate_material: Optional[Dict[str, int]] = None
+    #: A vehicle's lamps (name -> {kind, side, centre, corners, normal} in object space) and
+    #: the placeholder material of each lens (None: the model declares no lamps).
+    lamps: Optional[Dict[str, Dict[str, Any]]] = None
+    lamp_material: Optional[Dict[str, int]] = None
     #: The model's material ids by the role its library entry gives them ({"paint": [...]}).
     roles: Optional[Dict[str, List[int]]] = None
 

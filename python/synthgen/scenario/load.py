@@ -37,6 +37,10 @@ class Scenario:
         for o in spec["objects"]:
             if o["label"] and o["class"] not in names:
                 names.append(o["class"])
+        for o in spec["objects"]:  # plate-only labels (objects[].plates.class)
+            cls = (o.get("plates") or {}).get("class") if o["label"] else None
+            if cls and cls not in names:
+                names.append(cls)
         self.class_names = names
 
     @property

@@ -82,7 +82,7 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if not isinstance(e, dict):
                 raise AssetError(f"{where}: expected a mapping")
             allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions",
-                       "forward", "up", "optional", "ride_height", "wheels", "plates", "materials"}
+                       "forward", "up", "optional", "ride_height", "wheels", "plates", "lamps", "materials"}
             for k in e:
                 if k not in allowed:
                     m = difflib.get_close_matches(str(k), allowed, n=1)
@@ -108,6 +108,8 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                 _check_wheels(e["wheels"], f"{where} ({e['id']}): wheels")
             if "plates" in e:
                 _check_plates(e["plates"], f"{where} ({e['id']}): plates")
+            if "lamps" in e:
+                _check_lamps(e["lamps"], f"{where} ({e['id']}): lamps")
             if "materials" in e:
                 from .vehicles import ROLES
 
@@ -159,6 +161,30 @@ def _check_plates(p: Any, where: str) -> None:
                 raise AssetError(f"{where}.{name}: unknown key '{k}' (height, offset)")
             if not isinstance(v, (int, float)) or (k == "height" and v <= 0):
                 raise AssetError(f"{where}.{name}.{k}: expected a number (metres{', > 0' if k == 'height' else ''})")
+
+
+def _check_lamps(p: Any, where: str) -> None:
+    """A vehicle's lamps: {kind: {height (m, > 0), offset (m, >= 0), size ([w, h] m, > 0)}}."""
+    from .vehicles import LAMP_KINDS
+
+    if not isinstance(p, dict) or not p:
+        raise AssetError(f"{where}: expected a mapping {{kind: {{height, offset, size}}}}")
+    for kind, spec in p.items():
+        if kind not in LAMP_KINDS:
+            m = difflib.get_close_matches(str(kind), list(LAMP_KINDS), n=1)
+            raise AssetError(f"{where}: unknown lamp '{kind}' ({', '.join(LAMP_KINDS)})"
+                             + (f" (did you mean '{m[0]}'?)" if m else ""))
+        if not isinstance(spec, dict) or "height" not in spec:
+            raise AssetError(f"{where}.{kind}: expected {{height: metres above the ground, offset: metres from "
+                             f"the centre line, size: [width, height] metres}}")
+        for k, v in spec.items():
+            if k not in ("height", "offset", "size"):
+                raise AssetError(f"{where}.{kind}: unknown key '{k}' (height, offset, size)")
+            if k == "size":
+                if not (isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and x > 0 for x in v)):
+                    raise AssetError(f"{where}.{kind}.size: expected [width, height], metres > 0")
+            elif not isinstance(v, (int, float)) or v < 0 or (k == "height" and v == 0):
+                raise AssetError(f"{where}.{kind}.{k}: expected a number (metres, {'> 0' if k == 'height' else '>= 0'})")
 
 
 def _lookup(manifest: Dict[str, Dict[str, Any]], asset_id: str) -> Dict[str, Any]:

@@ -22,6 +22,16 @@ instance id, one box). The entry's keys (lengths in metres, along the model's ow
     upright, as on its bracket. The plate quads are part of the mesh with one placeholder material (a blank
     plate), which the ``plates`` randomizer replaces per frame with a registration's texture.
 
+``lamps``
+    ``{<kind>: {height, offset, size}}``, the kinds ``head``, ``tail``, ``brake`` (omitted: the
+    tail lamp brightens when braking, a combined lamp), ``indicator_front``, ``indicator_rear``
+    (:data:`LAMP_KINDS`): a lamp's centre ``height`` above the ground, its centre's ``offset``
+    from the centre line (a pair at -offset and +offset; 0: one lamp on the centre line, as a
+    motorcycle's), its ``size`` (width, height; default per kind). Each lamp's lens is a small
+    grid of quads cast onto the body at its front or rear (every vertex on the surface there,
+    standing a few millimetres out), with a placeholder material (an unlit lens) that the
+    ``lamps`` randomizer switches on per frame.
+
 ``materials``
     ``{<material name in the model>: role}``: ``paint`` (the body: the ``paint`` randomizer
     recolours it), ``glass`` (dark, a smooth coat reflecting the sky: it shows the interior as
@@ -32,15 +42,29 @@ Models whose faces carry no normals get smooth ones within a crease angle (AC3D'
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["AXES", "PLATE_MM", "ROLES", "role_material", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
+__all__ = ["AXES", "PLATE_MM", "ROLES", "LAMP_KINDS", "lamp_names", "lamp_lenses", "role_material", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
            "build_vehicle"]
 
 #: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
 PLATE_MM = (520.0, 112.0)
+
+#: Lamp kinds: the end they are at (+1 front, -1 rear), their default size (width, height in
+#: metres), the colour of the unlit lens (linear RGB albedo) and of the light (linear RGB, its
+#: luminance normalised to 1). Their luminance when lit is the ``lamps`` randomizer's.
+LAMP_KINDS: Dict[str, Dict[str, Any]] = {
+    "head": {"end": 1.0, "size": (0.22, 0.10), "lens": (0.55, 0.55, 0.55), "light": (1.0, 0.97, 0.9)},
+    "tail": {"end": -1.0, "size": (0.16, 0.08), "lens": (0.22, 0.012, 0.01), "light": (1.0, 0.02, 0.005)},
+    "brake": {"end": -1.0, "size": (0.12, 0.06), "lens": (0.22, 0.012, 0.01), "light": (1.0, 0.02, 0.005)},
+    "indicator_front": {"end": 1.0, "size": (0.07, 0.05), "lens": (0.5, 0.22, 0.02), "light": (1.0, 0.42, 0.0)},
+    "indicator_rear": {"end": -1.0, "size": (0.07, 0.05), "lens": (0.5, 0.22, 0.02), "light": (1.0, 0.42, 0.0)},
+}
+
+#: Lens grid: vertices across and up each lamp (cast onto the body one by one).
+_LENS_GRID = (9, 5)
 
 #: The axes a model may declare as its forward and up directions, as unit vectors.
 AXES = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0), "-y": (0.0, -1.0, 0.0),
@@ -218,14 +242,119 @@ def plate_mounts(pos: np.ndarray, tri: np.ndarray, entry: Mapping[str, Any], uni
     return out
 
 
+def lamp_names(entry: Mapping[str, Any]) -> List[Tuple[str, str, str]]:
+    """(name, kind, side) of each lamp of the entry: side "left" / "right" (as the driver sees
+    them) for a pair, "centre" for a lamp on the centre line; name "<kind>.<side>"."""
+    out = []
+    for kind, spec in (entry.get("lamps") or {}).items():
+        sides = ("centre",) if float(spec.get("offset", 0.0)) == 0.0 else ("left", "right")
+        out += [(f"{kind}.{side}", kind, side) for side in sides]
+    return out
+
+
+def lamp_lenses(pos: np.ndarray, tri: np.ndarray, entry: Mapping[str, Any], unit: float) -> Dict[str, Dict[str, Any]]:
+    """The lenses of the entry's lamps, cast onto the body (``pos``, standing on the ground):
+    {name: {"kind", "side", "grid": nu x nv x 3 vertices (model units; u across from the
+    vehicle's left to its right, v from bottom to top), "valid" (nu x nv: on the body), "centre", "corners" (the grid's four),
+    "normal" (outward)}}. Every
+    vertex lies on the body surface hit by a ray along the vehicle's axis from outside, moved
+    out by a stand-off (3 mm, 1.5 mm more per kind, so that overlapping lamps -- a brake lamp
+    inside a tail lamp -- do not fight); a vertex whose ray finds no surface, or that is cut off
+    from the lens's centre by a jump in depth (past the body's outline, through a gap), is off
+    the lens (``valid`` false: no triangle uses it)."""
+    fwd, up, right = model_axes(entry.get("forward", "+x"), entry.get("up", "+y"))
+    along = pos @ fwd
+    reach = float(np.ptp(along)) + 1.0
+    centre_f = 0.5 * float(along.min() + along.max())
+    nu, nv = _LENS_GRID
+    out: Dict[str, Dict[str, Any]] = {}
+    for k, (kind, spec) in enumerate((entry.get("lamps") or {}).items()):
+        info = LAMP_KINDS[kind]
+        sgn = float(info["end"])
+        w, h = (float(v) / unit for v in spec.get("size", info["size"]))
+        y, off = float(spec["height"]) / unit, float(spec.get("offset", 0.0)) / unit
+        standoff = (0.003 + 0.0015 * k) / unit
+        for name, kind_, side in lamp_names({"lamps": {kind: spec}}):
+            lat = {"left": -off, "right": off, "centre": 0.0}[side]
+            us, vs = np.linspace(-0.5 * w, 0.5 * w, nu), np.linspace(-0.5 * h, 0.5 * h, nv)
+            origins = np.array([(centre_f + sgn * reach) * fwd + (lat + a) * right + (y + b) * up
+                                for b in vs for a in us])
+            t = ray_mesh(pos, tri, origins, -sgn * fwd)
+            ok = np.isfinite(t)
+            if not ok.any():
+                raise ValueError(f"lamp {name} at {spec['height']} m, offset {spec.get('offset', 0.0)} m: no body "
+                                 f"surface there")
+            # A ray past the body's outline (a rounded corner) or through a gap (a grille, a
+            # lamp's rim) finds no surface or one far behind its neighbours': the lens is the
+            # vertices reached from its centre through neighbours whose hits are within a
+            # slope of 2 (63 degrees off the axis) plus 5 mm of each other -- it follows a
+            # sloped or wrapped body, stops at jumps. The others are off the lens (they keep
+            # the lens's median depth; no triangle uses them).
+            tg, okg = t.reshape(nv, nu).T, ok.reshape(nv, nu).T
+            step = (w / (nu - 1), h / (nv - 1))
+            cu, cv = nu // 2, nv // 2
+            if not okg[cu, cv]:
+                cand = np.argwhere(okg)
+                cu, cv = cand[np.argmin(np.hypot(cand[:, 0] - cu, cand[:, 1] - cv))]
+            valid = np.zeros((nu, nv), bool)
+            valid[cu, cv] = True
+            todo = [(cu, cv)]
+            while todo:
+                i0, j0 = todo.pop()
+                for di, dj, sp in ((1, 0, step[0]), (-1, 0, step[0]), (0, 1, step[1]), (0, -1, step[1])):
+                    i1, j1 = i0 + di, j0 + dj
+                    if 0 <= i1 < nu and 0 <= j1 < nv and okg[i1, j1] and not valid[i1, j1] and \
+                            abs(tg[i1, j1] - tg[i0, j0]) <= 2.0 * sp + 0.005 / unit:
+                        valid[i1, j1] = True
+                        todo.append((i1, j1))
+            on = valid.T.reshape(-1)
+            t = np.where(on, t, float(np.median(t[on])))
+            grid = (origins - sgn * (t - standoff)[:, None] * fwd).reshape(nv, nu, 3).transpose(1, 0, 2)
+            where = f"lamp {name} at {spec['height']} m, offset {spec.get('offset', 0.0)} m"
+            if valid.sum() < 0.25 * valid.size:
+                raise ValueError(f"{where}: less than a quarter of it lies on the body (past its outline?)")
+            depth = sgn * float(np.median((grid[valid] @ fwd))) - sgn * centre_f
+            extreme = sgn * (float(along.max()) if sgn > 0 else float(along.min())) - sgn * centre_f
+            if extreme - depth > 0.6 / unit:
+                raise ValueError(f"{where}: it lands {(extreme - depth) * unit:.2f} m behind the body's "
+                                 f"{'front' if sgn > 0 else 'rear'} (past its outline, on a part further in?)")
+            out[name] = {"kind": kind_, "side": side, "grid": grid, "valid": valid,
+                         "centre": grid[nu // 2, nv // 2].copy(),
+                         "corners": grid[[0, -1, -1, 0], [0, 0, -1, -1]].copy(), "normal": sgn * fwd}
+    return out
+
+
+def _lens_mesh(grid: np.ndarray, valid: np.ndarray, outward: np.ndarray
+               ) -> Tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(positions, triangles facing ``outward``, normals, uvs) of a lens grid (nu x nv x 3), its
+    triangles those whose vertices are all ``valid`` (nu x nv) -- on the body."""
+    nu, nv = grid.shape[:2]
+    pos = grid.reshape(-1, 3)
+    idx = np.arange(nu * nv).reshape(nu, nv)
+    ok = valid.reshape(-1)
+    tris = []
+    for i in range(nu - 1):
+        for j in range(nv - 1):
+            a, b, c, d = idx[i, j], idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]
+            tris += [t for t in ([a, b, c], [a, c, d]) if ok[t].all()]
+    tris = np.asarray(tris, np.int64).reshape(-1, 3)
+    n = np.cross(pos[tris[:, 1]] - pos[tris[:, 0]], pos[tris[:, 2]] - pos[tris[:, 0]])
+    flip = (n @ outward) < 0
+    tris[flip] = tris[flip][:, ::-1]
+    uv = np.stack(np.meshgrid(np.linspace(0, 1, nu), np.linspace(0, 1, nv), indexing="ij"), -1).reshape(-1, 2)
+    return pos, tris, np.repeat(outward[None].astype(np.float32), len(pos), 0), uv.astype(np.float32)
+
+
 def build_vehicle(body: Mapping[str, Any], entry: Mapping[str, Any], unit: float,
-                  tyre_material: int, rim_material: int, plate_materials: Optional[Mapping[str, int]] = None
-                  ) -> Dict[str, Any]:
+                  tyre_material: int, rim_material: int, plate_materials: Optional[Mapping[str, int]] = None,
+                  lamp_materials: Optional[Mapping[str, int]] = None) -> Dict[str, Any]:
     """The arrays of a vehicle mesh (positions, indices, normals, uvs or None, material_ids) in the
     model's units, and its plate mounts (``plates``: name -> 4 x 3 corners): ``body``
     (:meth:`Scene.mesh_arrays` of the imported model) lifted by the entry's ride height, its
     wheels (if the entry has ``wheels``) and plate quads (``plates``, each with its placeholder
-    material from ``plate_materials``) added. ``unit``: metres per model unit."""
+    material from ``plate_materials``) and lamp lenses (``lamps``: :func:`lamp_lenses`, each with
+    its placeholder material from ``lamp_materials``, by lamp name) added. ``unit``: metres per
+    model unit."""
     axes = model_axes(entry.get("forward", "+x"), entry.get("up", "+y"))
     fwd, up, right = axes
     pos = np.asarray(body["positions"], np.float64)
@@ -255,9 +384,19 @@ def build_vehicle(body: Mapping[str, Any], entry: Mapping[str, Any], unit: float
         M.append(np.full(2, (plate_materials or {}).get(name, -1), np.int32))
         U.append(np.array([[0, 1], [1, 1], [1, 0], [0, 0]], np.float32))
         base += 4
-    if uvs is None and mounts:
+    lenses = lamp_lenses(pos, tri, entry, unit) if entry.get("lamps") else {}
+    for name, lens in lenses.items():
+        lp, lt, ln, lu = _lens_mesh(lens["grid"], lens["valid"], lens["normal"])
+        P.append(lp)
+        N.append(ln)
+        T.append(lt + base)
+        M.append(np.full(len(lt), (lamp_materials or {}).get(name, -1), np.int32))
+        U.append(lu)
+        base += len(lp)
+    if uvs is None and (mounts or lenses):
         U[0] = np.zeros((len(pos), 2), np.float32)
-    out = {"plates": mounts}
+    out = {"plates": mounts, "lamps": {k: {kk: vv for kk, vv in v.items() if kk not in ("grid", "valid")}
+                                       for k, v in lenses.items()}}
     if "wheels" not in entry:
         out.update(_concat(P, N, T, M, U))
         return out

@@ -165,6 +165,9 @@ class Choice(String):
         return "one of " + ", ".join(self.choices)
 
     def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        if isinstance(value, bool) and ("on" if value else "off") in self.choices:
+            # YAML 1.1 reads a bare off / on (and no / yes) as a boolean.
+            value = "on" if value else "off"
         if not isinstance(value, str):
             ctx.error(loc, f"expected one of {', '.join(self.choices)}; got {show_value(value)}")
         if value not in self.choices:
