@@ -104,3 +104,25 @@ TEST(rng, deterministic_and_seed_dependent) {
   }
   EXPECT_GT(differ, 30);
 }
+
+// Each sample's 2D point, over seeds (pixels), is uniform on the square: the two coordinates'
+// Owen scrambles are independent. (With y's scramble seed derived from x's, a sample's point
+// lay on a curve -- y a function of x -- and low-spp renders were biased the same way for
+// every seed.) Chi-square over an 8 x 8 grid of the points of fixed sample indices.
+TEST(rng, each_samples_2d_point_is_uniform_over_seeds) {
+  for (uint32_t spp : {1u, 4u, 16u, 32u})
+    for (uint32_t sample : {0u, 1u, 5u})
+      for (uint32_t dim : {0u, 2u, 8u}) {
+        if (sample >= spp) continue;
+        std::vector<double> obs(64, 0.0), exp(64, 0.0);
+        const int n = 64000;
+        for (int p = 0; p < n; ++p) {
+          PixelSampler ps(12345, uint64_t(p), sample, spp);
+          Vec2f v = ps.get_2d(dim);
+          obs[std::min(7, int(v.y * 8)) * 8 + std::min(7, int(v.x * 8))] += 1.0;
+        }
+        for (double& e : exp) e = n / 64.0;
+        sgtest::Chi2Result r = sgtest::chi2_test(obs, exp);
+        EXPECT_TRUE(r.ok) << "spp " << spp << " sample " << sample << " dim " << dim << ": " << r.message;
+      }
+}
