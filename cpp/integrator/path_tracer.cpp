@@ -82,6 +82,10 @@ struct PathState {
   Color L{0.f}, beta{1.f};
   Color shadow_contrib{0.f};  ///< NEE contribution, added if the shadow ray is unoccluded
   float prev_pdf = 0.f;
+  /// Where the previous vertex chose its light and the light weights' sum there
+  /// (RenderScene::pick_light): the MIS weight of emission the next segment finds reuses them.
+  Vec3f prev_p{0.f};
+  float prev_light_total = 0.f;
   uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
   uint32_t bounce = 0;
   bool prev_delta = true;  ///< the camera "sampled" the first direction
@@ -182,7 +186,8 @@ class PathTracer {
       Color le = light->le(st.ray.d);
       if (is_black(le)) continue;
       float w = 1.f;
-      if (!st.prev_delta) w = power_heuristic(st.prev_pdf, sc.light_pmf(st.ray.o, li) * light->pdf_le(st.ray.d));
+      if (!st.prev_delta)
+        w = power_heuristic(st.prev_pdf, sc.light_pmf(st.prev_p, li, st.prev_light_total) * light->pdf_le(st.ray.d));
       st.L += st.beta * le * w;
     }
     // Lights only reflections see: no MIS (never sampled), only at the end of a camera path of
@@ -233,7 +238,8 @@ class PathTracer {
         if (!st.prev_delta && li >= 0) {
           float cos_l = std::fabs(dot(si.ng, wo));
           const AreaLight* area = static_cast<const AreaLight*>(sc.lights[size_t(li)]);
-          float pdf_light = sc.light_pmf(st.ray.o, uint32_t(li)) * area->area_pdf(hit.prim) * hit.t * hit.t / cos_l;
+          float pdf_light = sc.light_pmf(st.prev_p, uint32_t(li), st.prev_light_total) * area->area_pdf(hit.prim) *
+                            hit.t * hit.t / cos_l;
           w = power_heuristic(st.prev_pdf, pdf_light);
         }
         st.L += st.beta * le * w;
@@ -251,7 +257,8 @@ class PathTracer {
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
     if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
       float pick_pmf;
-      size_t li = sc.pick_light(si.p, u_pick_lobe.x, &pick_pmf);
+      size_t li = sc.pick_light(si.p, u_pick_lobe.x, &pick_pmf, &st.prev_light_total);
+      st.prev_p = si.p;
       const Light* light = sc.lights[li];
       // Without the inserted objects their emitters are absent: the same choice adds nothing.
       const bool light_absent = layer == RayLayer::catchers && !sc.light_in_catcher_layer[li];

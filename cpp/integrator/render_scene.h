@@ -83,60 +83,67 @@ struct RenderScene {
   /// by power alone, a car's small, bright lamps next to a sky whose power is counted over
   /// the whole scene are never chosen, and their light arrives only through BSDF-sampled hits,
   /// as fireflies.
-  size_t pick_light(const Vec3f& p, float u, float* pmf) const {
+  /// `total` (when given) receives the weights' sum at p, from which light_pmf(p, li, total)
+  /// gives any light's probability at p without weighing them all again.
+  size_t pick_light(const Vec3f& p, float u, float* pmf, float* total = nullptr) const {
     const size_t n = lights.size();
+    if (total) *total = 0.f;
     if (n == 1) {
       *pmf = 1.f;
       return 0;
     }
     if (n > k_max_weighed_lights) return light_pick.sample(u, pmf);
     float w[k_max_weighed_lights];
-    float total = weigh_lights(p, w);
-    if (!(total > 0.f)) return light_pick.sample(u, pmf);
-    float target = u * total, acc = 0.f;
+    float sum = weigh_lights(p, w);
+    if (!(sum > 0.f)) return light_pick.sample(u, pmf);
+    if (total) *total = sum;
+    float target = u * sum, acc = 0.f;
     size_t i = 0;
     for (; i + 1 < n; ++i) {
       acc += w[i];
       if (target < acc && w[i] > 0.f) break;
     }
     while (w[i] <= 0.f && i > 0) --i;  // rounding at the top end: the last light with weight
-    *pmf = w[i] / total;
+    *pmf = w[i] / sum;
     return i;
   }
   /// The probability that pick_light(p, ...) chooses light li.
   float light_pmf(const Vec3f& p, uint32_t li) const {
-    const size_t n = lights.size();
-    if (n == 1) return 1.f;
-    if (n > k_max_weighed_lights) return light_pick.pmf(li);
+    if (lights.size() == 1) return 1.f;
+    if (lights.size() > k_max_weighed_lights) return light_pick.pmf(li);
     float w[k_max_weighed_lights];
-    float total = weigh_lights(p, w);
+    return light_pmf(p, li, weigh_lights(p, w));
+  }
+  /// light_pmf with the weights' sum at p that pick_light(p, ...) returned (0: the power
+  /// distribution was used there).
+  float light_pmf(const Vec3f& p, uint32_t li, float total) const {
+    if (lights.size() == 1) return 1.f;
     if (!(total > 0.f)) return light_pick.pmf(li);
-    return w[li] / total;
+    return light_weight(li, p) / total;
   }
   float weigh_lights(const Vec3f& p, float* w) const {
     float total = 0.f;
-    for (size_t i = 0; i < lights.size(); ++i) {
-      const LightWeight& lw = light_weights[i];
-      if (lw.local) {
-        Vec3f d = p - lw.centre;
-        float d2 = dot(d, d);
-        w[i] = lw.power / (4.f * k_pi * std::max(d2, lw.radius2));
-        if (lw.oriented && d2 > lw.radius2) {
-          // NOTE: pbrt-v4's LightBounds::Importance (Pharr et al., "Physically Based Rendering",
-          // 4th ed., sec. 12.6.3): the angle between the cone's axis and the direction to p,
-          // less the cone's half-angle and the sphere's angular radius, bounds the emission
-          // angle from below; its cosine (0 past 90 degrees) weighs the light.
-          float d_len = std::sqrt(d2);
-          float cos_t = std::min(1.f, std::max(-1.f, dot(lw.axis, d) / d_len));
-          float theta = std::acos(cos_t) - lw.cone_angle - std::asin(std::min(1.f, std::sqrt(lw.radius2) / d_len));
-          w[i] *= theta <= 0.f ? 1.f : (theta >= 0.5f * k_pi ? 0.f : std::cos(theta));
-        }
-      } else {
-        w[i] = lw.power;
-      }
-      total += w[i];
-    }
+    for (size_t i = 0; i < lights.size(); ++i) total += (w[i] = light_weight(i, p));
     return total;
+  }
+  /// What pick_light weighs light i by at p.
+  float light_weight(size_t i, const Vec3f& p) const {
+    const LightWeight& lw = light_weights[i];
+    if (!lw.local) return lw.power;
+    Vec3f d = p - lw.centre;
+    float d2 = dot(d, d);
+    float w = lw.power / (4.f * k_pi * std::max(d2, lw.radius2));
+    if (lw.oriented && d2 > lw.radius2) {
+      // NOTE: pbrt-v4's LightBounds::Importance (Pharr et al., "Physically Based Rendering",
+      // 4th ed., sec. 12.6.3): the angle between the cone's axis and the direction to p,
+      // less the cone's half-angle and the sphere's angular radius, bounds the emission
+      // angle from below; its cosine (0 past 90 degrees) weighs the light.
+      float d_len = std::sqrt(d2);
+      float cos_t = std::min(1.f, std::max(-1.f, dot(lw.axis, d) / d_len));
+      float theta = std::acos(cos_t) - lw.cone_angle - std::asin(std::min(1.f, std::sqrt(lw.radius2) / d_len));
+      w *= theta <= 0.f ? 1.f : (theta >= 0.5f * k_pi ? 0.f : std::cos(theta));
+    }
+    return w;
   }
 
   const Material* material_of(const InstanceRecord& inst, uint32_t prim) const {
