@@ -18,7 +18,7 @@ import numpy as np  # noqa: E402
 
 def main(argv=None) -> int:
     from synthgen.frame.renderer import FrameRenderer
-    from synthgen.outputs.files import to_srgb8
+    from synthgen.outputs.files import write_srgb_png
     from synthgen.scenario import check_inputs, load_scenario
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -31,15 +31,11 @@ def main(argv=None) -> int:
     rows = []
     for k in (int(v) for v in args.frames.split(",")):
         arrays, meta, _ = fr.render(k)
-        pair = np.concatenate([to_srgb8(fr.last_photo.pixels), np.full((arrays["rgb"].shape[0], 8, 3), 255, np.uint8),
-                               to_srgb8(arrays["rgb"])], axis=1)
-        rows += [pair[::2, ::2], np.full((4, pair.shape[1] // 2, 3), 255, np.uint8)]
+        pair = np.concatenate([fr.last_photo.pixels, np.ones((arrays["rgb"].shape[0], 8, 3), np.float32),
+                               arrays["rgb"]], axis=1)
+        rows += [pair[::2, ::2], np.ones((4, pair.shape[1] // 2, 3), np.float32)]
     img = np.concatenate(rows[:-1], axis=0)
-    import OpenImageIO as oiio
-
-    b = oiio.ImageBuf(oiio.ImageSpec(img.shape[1], img.shape[0], 3, oiio.UINT8))
-    b.set_pixels(oiio.ROI(), np.ascontiguousarray(img))
-    b.write(args.output)
+    write_srgb_png(args.output, img)
     print(f"wrote {args.output} ({img.shape[1]} x {img.shape[0]})")
     return 0
 

@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 
 def main(argv=None) -> int:
     from synthgen.frame.renderer import FrameRenderer
-    from synthgen.outputs.files import to_srgb8
+    from synthgen.outputs.files import write_srgb_png
     from synthgen.scenario import check_inputs, load_scenario
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -36,13 +36,9 @@ def main(argv=None) -> int:
     tiles = []
     for k in (int(v) for v in args.frames.split(",")):
         arrays, _, _ = fr.render(k)
-        tiles += [to_srgb8(arrays["rgb"])[::2, ::2], np.full((arrays["rgb"].shape[0] // 2, 4, 3), 255, np.uint8)]
+        tiles += [arrays["rgb"][::2, ::2], np.ones((arrays["rgb"].shape[0] // 2, 4, 3), np.float32)]
     img = np.concatenate(tiles[:-1], axis=1)
-    import OpenImageIO as oiio
-
-    b = oiio.ImageBuf(oiio.ImageSpec(img.shape[1], img.shape[0], 3, oiio.UINT8))
-    b.set_pixels(oiio.ROI(), np.ascontiguousarray(img))
-    b.write(args.output)
+    write_srgb_png(args.output, img)
     print(f"wrote {args.output} ({img.shape[1]} x {img.shape[0]})")
     return 0
 

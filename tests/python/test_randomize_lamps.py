@@ -88,9 +88,7 @@ outputs: [rgb, instance, depth]
     s = runner.run(str(d / "s.yaml"), str(d / "ds"), count=1, progress=False)
     assert not s["failures"], s.text()
     meta = json.load(open(d / "ds" / "meta" / "000000.json"))
-    exr = d / "ds" / "rgb" / "000000.exr"
-    img = oiio.ImageBuf(str(exr) if exr.exists() else str(d / "ds" / "images" / "000000.png"))
-    rgb = img.get_pixels(oiio.FLOAT)[..., :3]
+    rgb = oiio.ImageBuf(str(d / "ds" / "images" / "000000.png")).get_pixels(oiio.FLOAT)[..., :3]
     ids = oiio.ImageBuf(str(d / "ds" / "instance" / "000000.png")).get_pixels(oiio.UINT16)[..., 0]
     return meta, rgb, ids
 

@@ -9,6 +9,8 @@ import synthgen as sg
 from synthgen import primitives as P
 from synthgen import wear
 
+from test_output_kitti import _asset
+
 
 def _mask_texture(scene: sg.Scene, mix_id: int) -> int:
     info = scene.material_info(mix_id)
@@ -180,15 +182,6 @@ def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
 CAR = "mesh/sumo-car-normal-citrus"
 
 
-def _library_car():
-    from synthgen.scene import assets
-
-    try:
-        assets.resolve(CAR)
-    except Exception as e:  # noqa: BLE001 - no apt: nothing to test with
-        pytest.skip(f"{CAR} is not available: {e}")
-
-
 def _car_views(tmp_path, effect, params, distance, elevation, azimuths):
     """The library car (a palette paint) from four sides, with the wear ``effect`` of ``params``
     (YAML) and clean (the same frames: the effect's probability 0), 8 frames each. Yields, per frame, (meta, worn albedo,
@@ -200,7 +193,7 @@ def _car_views(tmp_path, effect, params, distance, elevation, azimuths):
 
     from synthgen import run as runner
 
-    _library_car()
+    _asset(CAR)
 
     def render(name, wear):
         d = tmp_path / name
@@ -288,7 +281,7 @@ def _near_edges_and_open(tmp_path, effect, params):
     from synthgen.frame.resources import Shapes
     from synthgen.scene import assets
 
-    _library_car()
+    _asset(CAR)
     scene = sg.Scene()
     shape = Shapes(scene).get("asset", CAR)
     arrays = scene.mesh_arrays(shape.mesh_id)
@@ -333,7 +326,7 @@ def test_the_car_row_shows_every_effect_on_the_library_car():
     every effect changes its tile (rendered small here)."""
     from synthgen.scene import gallery
 
-    _library_car()
+    _asset(CAR)
     w, h = 160, 120
     img = gallery.render_car_row(tile_w=w, tile_h=h, spp=2)
     n = len(gallery.CAR_EFFECTS)
@@ -352,9 +345,9 @@ def test_rust_creeps_out_from_the_scratches():
     n = 400
     ys, xs = np.mgrid[0:n, 0:n] / n
     pts = np.stack([xs.ravel(), ys.ravel(), np.full(n * n, 0.5)], 1).astype(np.float32)
-    lines = wear.scratch_lines(seed=3, density=8.0, width=0.04)
+    lines = {"seed": 3, "density": 8.0, "width": 0.04}  # the scratches' line parameters
     s = sg.Scene()
-    on_line = s.texture_values(wear._lines_texture(s, lines), pts)[:, 0] > 0.0
+    on_line = s.texture_values(wear.add_scratch_lines(s, **lines), pts)[:, 0] > 0.0
 
     def coverage(**kw):
         m = wear.rust(s, s.add_material("diffuse", {}), seed=2, amount=0.15, bottom_bias=0.0, streaks=0.0,

@@ -23,7 +23,7 @@ import os
 import platform
 import sys
 from collections.abc import Mapping
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 import OpenImageIO as oiio
@@ -55,6 +55,18 @@ def camera_meta(camera: Any) -> Dict[str, Any]:
         "K": [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]],
         "world_from_camera": np.asarray(camera.world_from_camera, dtype=np.float64).tolist(),
     }
+
+
+def image_points(camera: Any, world_from_object: np.ndarray, points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """Image positions (N x 2, continuous pixel coordinates) and camera-space depths (N: z along
+    the optical axis, as the depth output) of object-space points (N x 3) of an object placed by
+    ``world_from_object`` (4 x 4), seen by a PinholeCamera."""
+    p = np.asarray(points, np.float64).reshape(-1, 3)
+    cam_from_object = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64)) @ \
+        np.asarray(world_from_object, np.float64)
+    c = (cam_from_object @ np.c_[p, np.ones(len(p))].T)[:3]
+    uv = np.asarray(camera.K, np.float64) @ c
+    return (uv[:2] / uv[2]).T, c[2]
 
 
 def versions() -> Dict[str, str]:

@@ -110,28 +110,29 @@ def project_lamps(info: Mapping[str, Any], lamps: Mapping[str, Mapping[str, Any]
     lit, its centre and box (pixels, the projection of its lens's corners), and whether it is
     seen (its lens faces the camera and the depth buffer at its centre is the lens's, within
     3 cm: nothing in front of it). Lamps behind the camera are left out."""
-    K = np.array([[camera.fx, 0.0, camera.cx], [0.0, camera.fy, camera.cy], [0.0, 0.0, 1.0]])
-    wfc = np.asarray(camera.world_from_camera, np.float64)
-    cfo = np.linalg.inv(wfc) @ np.asarray(world_from_object, np.float64)
+    from ..outputs.render import image_points
+
+    cam_from_object = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64)) @ \
+        np.asarray(world_from_object, np.float64)
     lit = set(info.get("lit", ()))
     out = []
     for name in sorted(lamps):
         lamp = lamps[name]
         pts = np.vstack([np.asarray(lamp["centre"], np.float64)[None], np.asarray(lamp["corners"], np.float64)])
-        c = (cfo @ np.c_[pts, np.ones(len(pts))].T)[:3]
-        if (c[2] <= 0).any():
+        uv, z = image_points(camera, world_from_object, pts)
+        if (z <= 0).any():
             continue
-        uv = (K @ c)[:2] / c[2]
         # Facing the camera: the lens's outward normal against the direction to the camera.
-        n_cam = cfo[:3, :3] @ np.asarray(lamp["normal"], np.float64)
-        seen = bool(n_cam @ (-c[:, 0]) > 0.0)
+        centre_cam = (cam_from_object @ np.r_[pts[0], 1.0])[:3]
+        n_cam = cam_from_object[:3, :3] @ np.asarray(lamp["normal"], np.float64)
+        seen = bool(n_cam @ (-centre_cam) > 0.0)
         if seen and depth is not None:
-            u, v = int(uv[0, 0]), int(uv[1, 0])
+            u, v = int(uv[0, 0]), int(uv[0, 1])
             h, w = depth.shape
-            seen = 0 <= u < w and 0 <= v < h and abs(float(depth[v, u]) - float(c[2, 0])) < 0.03
+            seen = 0 <= u < w and 0 <= v < h and abs(float(depth[v, u]) - float(z[0])) < 0.03
         out.append({"name": name, "kind": lamp["kind"], "side": lamp["side"], "lit": name in lit,
-                    "centre": [round(float(uv[0, 0]), 2), round(float(uv[1, 0]), 2)],
-                    "bbox": [round(float(uv[0, 1:].min()), 2), round(float(uv[1, 1:].min()), 2),
-                             round(float(uv[0, 1:].max()), 2), round(float(uv[1, 1:].max()), 2)],
+                    "centre": [round(float(uv[0, 0]), 2), round(float(uv[0, 1]), 2)],
+                    "bbox": [round(float(uv[1:, 0].min()), 2), round(float(uv[1:, 1].min()), 2),
+                             round(float(uv[1:, 0].max()), 2), round(float(uv[1:, 1].max()), 2)],
                     "visible": bool(seen)})
     return out

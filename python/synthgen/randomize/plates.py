@@ -72,8 +72,8 @@ def project_plates(info: Mapping[str, Any], mounts: Mapping[str, np.ndarray], wo
     right, bottom right, bottom left), its box, and each character's box (the projection of its
     box on the plate texture) with whether it is seen (the depth buffer at the character's
     centre is the plate's, within 2 cm: nothing in front of it)."""
-    K = np.array([[camera.fx, 0.0, camera.cx], [0.0, camera.fy, camera.cy], [0.0, 0.0, 1.0]])
-    cfw = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64))
+    from ..outputs.render import image_points
+
     w_px, h_px = info["texture_size"]
     out = []
     for name in info["mounts"]:
@@ -85,10 +85,7 @@ def project_plates(info: Mapping[str, Any], mounts: Mapping[str, np.ndarray], wo
             return tl + (tr - tl) * (u / w_px) + (bl - tl) * (v / h_px)
 
         def image(pts: Sequence[np.ndarray]) -> Tuple[np.ndarray, np.ndarray]:
-            p = np.c_[np.asarray(pts), np.ones(len(pts))]
-            c = (cfw @ np.asarray(world_from_object, np.float64) @ p.T)[:3]
-            uv = K @ c
-            return (uv[:2] / uv[2]).T, c[2]
+            return image_points(camera, world_from_object, np.asarray(pts))
 
         corners, z = image(list(q))
         if (z <= 0).any():
@@ -127,17 +124,17 @@ def plate_parts(info: Mapping[str, Any], mounts: Mapping[str, np.ndarray], world
     (``depth`` within 1 cm of the plate's plane along the pixel's ray)."""
     from ..outputs.coco import mask_bbox, rle_encode, rle_to_string
     from ..outputs.kitti import wrap_angle
+    from ..outputs.render import image_points
 
-    K = np.array([[camera.fx, 0.0, camera.cx], [0.0, camera.fy, camera.cy], [0.0, 0.0, 1.0]])
     cfo = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64)) @ np.asarray(world_from_object, np.float64)
     h_img, w_img = depth.shape
     out = []
     for name in info["mounts"]:
         q = np.asarray(mounts[name], np.float64)  # TL, TR, BR, BL (object space)
-        c = (cfo @ np.c_[q, np.ones(4)].T)[:3]
-        if (c[2] <= 0).any():
+        uv, z = image_points(camera, world_from_object, q)
+        if (z <= 0).any():
             continue
-        uv = ((K @ c)[:2] / c[2]).T
+        c = (cfo @ np.c_[q, np.ones(4)].T)[:3]  # the corners in camera space, for the plate's plane
         # The plate's plane in camera space, n . X = n . c0.
         n = np.cross(c[:, 1] - c[:, 0], c[:, 3] - c[:, 0])
         n /= np.linalg.norm(n)

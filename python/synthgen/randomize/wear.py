@@ -87,6 +87,10 @@ SCHEMA = Record({
 }, default=None, doc="wear effects (synthgen.wear presets), applied in the order rust, dirt, scratches, ice")
 
 
+#: The scratches' parameters that shape their lines (:func:`synthgen.scene.wear.add_scratch_lines`).
+LINE_KEYS = ("seed", "density", "width", "direction", "elongation", "style", "spread")
+
+
 class Wear(Randomizer):
     key = "wear"
     schema = SCHEMA
@@ -114,14 +118,9 @@ class Wear(Randomizer):
         for effect, kw in chosen.items():
             extra: Dict[str, Any] = {}
             if effect == "rust" and "scratches" in chosen:
-                sc = chosen["scratches"]
-                extra["scratch_lines"] = wear.scratch_lines(**{k: sc[k] for k in LINE_KEYS if k in sc})
+                extra["scratch_lines"] = {k: v for k, v in chosen["scratches"].items() if k in LINE_KEYS}
             mats = getattr(wear, effect)(ctx.scene, mats, **kw, **extra)
         return mats, chosen
-
-
-#: The scratches' parameters that shape their lines (:func:`synthgen.scene.wear.scratch_lines`).
-LINE_KEYS = ("seed", "density", "width", "direction", "elongation", "style", "spread")
 
 
 register(Wear())

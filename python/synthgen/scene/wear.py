@@ -25,7 +25,7 @@ import numpy as np
 
 from .._core import Scene, SynthgenError, TextureRef
 
-__all__ = ["rust", "scratches", "scratch_lines", "ice", "dirt", "decal", "RUST_COLORS"]
+__all__ = ["rust", "scratches", "add_scratch_lines", "ice", "dirt", "decal", "RUST_COLORS"]
 
 #: Colour ramp of rust (linear RGB): dark brown to orange (the seed's rust colour map).
 RUST_COLORS = ((0.0, (0.05, 0.02, 0.01)), (0.35, (0.16, 0.05, 0.015)), (0.7, (0.42, 0.14, 0.03)),
@@ -98,9 +98,9 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
     relative-local coordinates (``scale`` features across the object), more towards the bottom
     (``bottom_bias``: 0 = none, 1 = strong), and runs down in vertical streaks (noise stretched
     along the object's height, weight ``streaks``), creeps out from scratches through the paint
-    (``scratch_lines``: the :func:`scratch_lines` parameters of the scratches the object also
-    gets -- the rust then follows those strokes, a halo four times their width, weight
-    ``from_scratches``), covering ``amount`` of the object; the rust
+    (``scratch_lines``: the line parameters of the scratches the object also gets, those of
+    :func:`add_scratch_lines` -- the rust then follows those strokes, a halo four times their
+    width, weight ``from_scratches``), covering ``amount`` of the object; the rust
     has a colour-ramp fBm and a turbulence bump of ``bump`` metres: Lambertian for ``roughness``
     >= 0.8 (the default 0.85), else a principled material of that roughness."""
     amount = _check("amount", amount, 0.0, 1.0)
@@ -133,10 +133,7 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
         # Paint scratched to the steel rusts there first, and the rust creeps under the paint
         # on either side: the scratches' own strokes, four times as wide (a strokes texture's
         # profile is 1 on the centre line, so the halo is densest at the scratch).
-        halo = dict(scratch_lines, width=min(0.5, 4.0 * float(scratch_lines["width"])))
-        if halo["texture"] == "cellular":
-            halo["remap"] = [0.0, halo["width"]]
-        creep = _lines_texture(scene, halo)
+        creep = add_scratch_lines(scene, **dict(scratch_lines, width=min(0.5, 4.0 * float(scratch_lines["width"]))))
         raw = {"a": TextureRef(scene.add_texture("blend", raw)), "b": TextureRef(creep), "op": "add",
                "factor": from_scratches * 1.5}
     mask = _mask(scene, raw, amount, 0.04)
@@ -156,10 +153,11 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
     return _mix(scene, base, wear, mask, stochastic=True)
 
 
-def scratch_lines(*, seed: int = 0, density: float = 8.0, width: float = 0.04, direction: Optional[str] = None,
-                  elongation: float = 8.0, style: str = "strokes", spread: float = 12.0) -> Dict[str, Any]:
-    """The texture of scratches' lines: ``{"texture": plugin, **its parameters}`` (see
-    :func:`scratches`; :func:`rust` takes it to creep out from the same strokes)."""
+def add_scratch_lines(scene: Scene, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
+                      direction: Optional[str] = None, elongation: float = 8.0, style: str = "strokes",
+                      spread: float = 12.0) -> int:
+    """The texture of scratches' lines (see :func:`scratches`, whose parameters these are;
+    :func:`rust` draws the same lines, wider, to creep out from them)."""
     if style not in ("strokes", "swirl", "cells"):
         raise SynthgenError(f"wear: 'style' must be strokes, swirl or cells, got {style!r}")
     axis = None
@@ -171,24 +169,18 @@ def scratch_lines(*, seed: int = 0, density: float = 8.0, width: float = 0.04, d
         sc = [float(density)] * 3
         if axis is not None:
             sc[axis] = float(density) / float(elongation)
-        return {"texture": "cellular", "output": "f2_minus_f1", "mapping": "object", "scale": sc, "seed": int(seed),
-                "remap": [0.0, width], "invert": True, "smooth": True, "width": float(width)}
-    params: Dict[str, Any] = {"texture": "strokes", "mode": "straight" if style == "strokes" else "swirl",
-                              "mapping": "object", "scale": float(density), "seed": int(seed),
-                              "width": min(0.5, float(width)), "density": 4}
+        return scene.add_texture("cellular", {"output": "f2_minus_f1", "mapping": "object", "scale": sc,
+                                              "seed": int(seed), "remap": [0.0, width], "invert": True,
+                                              "smooth": True})
+    params: Dict[str, Any] = {"mode": "straight" if style == "strokes" else "swirl", "mapping": "object",
+                              "scale": float(density), "seed": int(seed), "width": min(0.5, float(width)),
+                              "density": 4}
     if style == "strokes":
         longest = min(2.0, max(0.1, float(elongation) / 8.0))
         params.update(length=[0.3 * longest, longest], spread=float(spread))
         if axis is not None:
             params["direction"] = [1.0 if i == axis else 0.0 for i in range(3)]
-    return params
-
-
-def _lines_texture(scene: Scene, params: Mapping[str, Any]) -> int:
-    p = {k: v for k, v in params.items() if k != "texture"}
-    if params["texture"] == "cellular":
-        p.pop("width")
-    return scene.add_texture(str(params["texture"]), p)
+    return scene.add_texture("strokes", params)
 
 
 def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
@@ -222,8 +214,8 @@ def scratches(scene: Scene, base: Base, *, seed: int = 0, density: float = 8.0, 
     spread = _check("spread", spread, 0.0, 90.0)
     edges = _check("edges", edges, 0.0, 4.0)
     _check("edge_radius", edge_radius, 1e-4, 1.0)
-    lines = _lines_texture(scene, scratch_lines(seed=seed, density=density, width=width, direction=direction,
-                                                elongation=elongation, style=style, spread=spread))
+    lines = add_scratch_lines(scene, seed=seed, density=density, width=width, direction=direction,
+                              elongation=elongation, style=style, spread=spread)
     mask = lines
     if amount < 1.0:
         sel = scene.add_texture("noise", {"pattern": "fbm", "mapping": "object", "scale": float(density) / 4.0,
