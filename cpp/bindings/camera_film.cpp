@@ -157,6 +157,17 @@ void bind_render_result(py::module_& m) {
       .def_property_readonly(
           "class_id", [](std::shared_ptr<Film> f) { return wrap(f, f->class_id, {f->height, f->width}); },
           "H x W uint32 class id of the first hit at the pixel centre (0: background).")
+      .def_property_readonly(
+          "rgb_even", [](std::shared_ptr<Film> f) { return wrap(f, f->rgb_even, {f->height, f->width, 3}); },
+          "H x W x 3 float32: the mean of each pixel's even-numbered samples (with rgb_odd, two independent\n"
+          "half-sample estimates whose difference measures rgb's noise: synthgen.post.noise).")
+      .def_property_readonly(
+          "rgb_odd", [](std::shared_ptr<Film> f) { return wrap(f, f->rgb_odd, {f->height, f->width, 3}); },
+          "H x W x 3 float32: the mean of each pixel's odd-numbered samples.")
+      .def_property_readonly(
+          "variance", [](std::shared_ptr<Film> f) { return wrap(f, f->variance, {f->height, f->width, 3}); },
+          "H x W x 3 float32: the variance of rgb's per-pixel mean (the samples' unbiased variance / their\n"
+          "number; 0 with fewer than two samples).")
       .def_property_readonly("differential", [](std::shared_ptr<Film> f) { return f->differential; },
                              "True when the scene had catchers: the five buffers below are filled (else None).")
       .def_property_readonly(

@@ -34,6 +34,14 @@ struct Film {
   std::vector<uint32_t> instance_id;  ///< H x W, 0 = background
   std::vector<uint32_t> class_id;     ///< H x W, 0 = background
 
+  /// Noise estimation (not in labels-only renders): the mean radiance of each pixel's
+  /// even-numbered and of its odd-numbered samples (H x W x 3 each: two independent estimates
+  /// with half the samples each, whose difference measures rgb's noise -- Rousselle, Knaus
+  /// & Zwicker 2012, "Adaptive rendering with non-local means filtering"), and the variance
+  /// of rgb's mean (H x W x 3: the samples' unbiased variance / their number; 0 with fewer
+  /// than two samples).
+  std::vector<float> rgb_even, rgb_odd, variance;
+
   /// Differential rendering (scenes with catchers, Scene::set_instance_catcher), per pixel,
   /// each the sum over the pixel's valid samples divided by their number. A sample is
   /// "synthetic" when its camera ray first hits a non-catcher instance (an inserted object);

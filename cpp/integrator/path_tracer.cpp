@@ -169,6 +169,39 @@ inline float estimate_edges(const RenderScene& sc, const SurfaceInteraction& si,
   return float(open) / float(n);
 }
 
+/// One pixel's sample statistics: the sums of its even- and odd-numbered samples (by sample
+/// index) and of the squares, in double (the variance is a small difference of large sums).
+struct PixelMoments {
+  double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  double sq[3] = {0, 0, 0};
+  uint32_t n[2] = {0, 0};
+
+  void add(uint32_t sample_index, const Color& l) {
+    const int h = int(sample_index & 1u);
+    const double v[3] = {l.x, l.y, l.z};
+    for (int c = 0; c < 3; ++c) {
+      sum[h][c] += v[c];
+      sq[c] += v[c] * v[c];
+    }
+    ++n[h];
+  }
+  uint32_t count() const { return n[0] + n[1]; }
+  /// rgb (the mean of all samples), rgb_even / rgb_odd (the halves' means) and the variance
+  /// of the mean into the film at `pixel`.
+  void store(Film* film, uint64_t pixel) const {
+    const uint32_t total = count();
+    for (int c = 0; c < 3; ++c) {
+      const double s = sum[0][c] + sum[1][c];
+      const double mean = total ? s / total : 0.0;
+      film->rgb[3 * pixel + c] = float(mean);
+      film->rgb_even[3 * pixel + c] = n[0] ? float(sum[0][c] / n[0]) : 0.f;
+      film->rgb_odd[3 * pixel + c] = n[1] ? float(sum[1][c] / n[1]) : 0.f;
+      double var = total > 1 ? std::max(0.0, (sq[c] - s * mean) / double(total - 1)) / double(total) : 0.0;
+      film->variance[3 * pixel + c] = float(var);
+    }
+  }
+};
+
 class PathTracer {
  public:
   PathTracer(const RenderScene& scene, const RenderSettings& settings)
@@ -327,22 +360,22 @@ class PathTracer {
     uint64_t pixel = uint64_t(y) * sc.camera.width + x;
     constexpr int W = k_packet_size;
     PixelSampler samplers[W];
-    uint64_t pixel_key = 0;
+    uint64_t pixel_key[2] = {0, 0};  // per half of the samples (PixelSampler::half)
     for (uint32_t i = 0; i < uint32_t(W); ++i) {
       st[i] = PathState();
       samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_s.spp);
-      if (i == 0) pixel_key = samplers[0].pair_key(0);
+      if (i < 2) pixel_key[samplers[i].half()] = samplers[i].pair_key(0);
       if (i >= n || (lane_on && !lane_on[i])) {
         st[i].active = false;
         continue;
       }
       {
-        Vec2f j = samplers[i].get_2d_keyed(pixel_key);
+        Vec2f j = samplers[i].get_2d_keyed(pixel_key[samplers[i].half()]);
         st[i].ray = sc.camera.generate_ray(float(x) + j.x, float(y) + j.y);
       }
       st[i].cone_spread = m_sample_spread;
     }
-    VertexKeys keys;
+    VertexKeys keys[2];
     for (;;) {
       RayPacket rays;
       uint32_t n_active = 0;
@@ -368,7 +401,7 @@ class PathTracer {
           continue;
         }
         Ray shadow;
-        if (on_hit(st[i], hp.hit[i], samplers[i], keys, &shadow, layer, track)) {
+        if (on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], &shadow, layer, track)) {
           shadows.set(i, shadow);
           ++n_shadow;
         }
@@ -403,9 +436,9 @@ class PathTracer {
     }
   }
 
-  /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size; returns the sum of the valid
-  /// sample radiances, the number of valid samples and of camera-ray hits.
-  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, Color* sum, uint32_t* valid, uint32_t* hits,
+  /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size; adds the valid samples'
+  /// radiance to `m` and counts the camera-ray hits.
+  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, PixelMoments* m, uint32_t* hits,
                     PathCounters& counters) const {
     PathState st[k_packet_size];
     trace_lanes(x, y, s0, n, nullptr, RayLayer::all, false, st, counters);
@@ -415,15 +448,15 @@ class PathTracer {
         ++counters.nan;
         continue;
       }
-      *sum += st[i].L;
-      ++*valid;
+      m->add(s0 + i, st[i].L);
     }
   }
 
   /// Per-pixel sums of differential rendering (Film::differential).
   struct DifferentialSums {
-    Color full{0.f}, synthetic{0.f}, with{0.f}, without{0.f}, behind{0.f};
-    uint32_t valid = 0, hits = 0, synthetic_n = 0;
+    PixelMoments full;
+    Color synthetic{0.f}, with{0.f}, without{0.f}, behind{0.f};
+    uint32_t hits = 0, synthetic_n = 0;
   };
 
   /// Samples [s0, s0 + n) traced in the full scene and, where a path met an inserted object,
@@ -449,8 +482,7 @@ class PathTracer {
         ++counters.nan;
         continue;
       }
-      d->full += lf;
-      ++d->valid;
+      d->full.add(s0 + i, lf);
       if (full[i].synthetic_first) {
         d->synthetic += lf;
         d->behind += lw;
@@ -542,17 +574,15 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
                 PathTracer::DifferentialSums d;
                 for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
                   pt.trace_packet_differential(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &d, c);
-                const float inv = d.valid ? 1.f / float(d.valid) : 0.f;
+                const uint32_t valid = d.full.count();
+                const float inv = valid ? 1.f / float(valid) : 0.f;
                 auto put = [&](std::vector<float>& buf, const Color& v) {
                   buf[3 * pixel] = v.x * inv;
                   buf[3 * pixel + 1] = v.y * inv;
                   buf[3 * pixel + 2] = v.z * inv;
                 };
                 // NOTE: rgb divides like the plain path (sum / valid) so that it equals a plain render's.
-                Color full = d.valid ? d.full / float(d.valid) : Color(0.f);
-                film->rgb[3 * pixel] = full.x;
-                film->rgb[3 * pixel + 1] = full.y;
-                film->rgb[3 * pixel + 2] = full.z;
+                d.full.store(film, pixel);
                 put(film->synthetic_rgb, d.synthetic);
                 put(film->catcher_with, d.with);
                 put(film->catcher_without, d.without);
@@ -561,14 +591,11 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
                 film->alpha[pixel] = float(d.hits) / float(settings.spp);
                 continue;
               }
-              Color sum(0.f);
-              uint32_t valid = 0, hits = 0;
+              PixelMoments m;
+              uint32_t hits = 0;
               for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
-                pt.trace_packet(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &sum, &valid, &hits, c);
-              if (valid) sum = sum / float(valid);
-              film->rgb[3 * pixel] = sum.x;
-              film->rgb[3 * pixel + 1] = sum.y;
-              film->rgb[3 * pixel + 2] = sum.z;
+                pt.trace_packet(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &m, &hits, c);
+              m.store(film, pixel);
               film->alpha[pixel] = float(hits) / float(settings.spp);
             }
           rays += c.rays;

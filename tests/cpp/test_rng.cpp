@@ -47,26 +47,54 @@ TEST(rng, bit_reversal_and_reversed_sobol_match_their_definitions) {
 
 // Every pair of dimensions of a pixel's spp samples is a (0, 2)-net in base 2 for
 // power-of-two spp: each elementary interval of area 1/spp holds exactly one point.
-TEST(rng, each_dimension_pair_is_stratified_over_the_pixel) {
-  const uint32_t spp = 64;
+// The even- and the odd-numbered samples are two independent randomizations (the film's
+// half-sample images must be independent estimates): each half's points of every pair form a
+// (0, 2)-net over that half, and the halves differ.
+TEST(rng, each_dimension_pair_is_stratified_over_each_half_of_the_pixel_samples) {
+  const uint32_t spp = 128, half_n = spp / 2;
   for (uint64_t pixel : {0ull, 17ull, 123456ull})
     for (uint32_t pair = 0; pair < 6; ++pair) {
-      std::vector<std::pair<float, float>> pts;
+      std::vector<std::pair<float, float>> pts[2];
       for (uint32_t s = 0; s < spp; ++s) {
         PixelSampler ps(7, pixel, s, spp);
-        pts.push_back({ps.get(2 * pair), ps.get(2 * pair + 1)});
+        EXPECT_EQ(ps.half(), s & 1u);
+        pts[s & 1u].push_back({ps.get(2 * pair), ps.get(2 * pair + 1)});
       }
-      for (uint32_t bx = 1; bx <= spp; bx *= 2) {
-        uint32_t by = spp / bx;
-        std::vector<int> cells(spp, 0);
-        for (auto& p : pts) {
-          uint32_t cx = std::min(bx - 1, uint32_t(p.first * bx)), cy = std::min(by - 1, uint32_t(p.second * by));
-          ++cells[cy * bx + cx];
+      for (int h = 0; h < 2; ++h)
+        for (uint32_t bx = 1; bx <= half_n; bx *= 2) {
+          uint32_t by = half_n / bx;
+          std::vector<int> cells(half_n, 0);
+          for (auto& p : pts[h]) {
+            uint32_t cx = std::min(bx - 1, uint32_t(p.first * bx)), cy = std::min(by - 1, uint32_t(p.second * by));
+            ++cells[cy * bx + cx];
+          }
+          EXPECT_TRUE(std::all_of(cells.begin(), cells.end(), [](int c) { return c == 1; }))
+              << "pixel " << pixel << " pair " << pair << " half " << h << " intervals " << bx << "x" << by;
         }
-        EXPECT_TRUE(std::all_of(cells.begin(), cells.end(), [](int c) { return c == 1; }))
-            << "pixel " << pixel << " pair " << pair << " intervals " << bx << "x" << by;
-      }
+      // Independent scrambles: the halves' point sets are not the same set.
+      auto a = pts[0], b = pts[1];
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      EXPECT_NE(a, b);
     }
+}
+
+// With 2 to 16 samples, the halves are not complementary strata: neither half keeps to one
+// side of the pixel in the first dimension (what a single net split by parity did).
+TEST(rng, halves_are_not_complementary_strata) {
+  int both_sides = 0, cases = 0;
+  for (uint32_t spp : {4u, 8u, 16u})
+    for (uint64_t pixel = 0; pixel < 200; ++pixel) {
+      int low[2] = {0, 0}, high[2] = {0, 0};
+      for (uint32_t s = 0; s < spp; ++s) {
+        PixelSampler ps(3, pixel, s, spp);
+        (ps.get(0) < 0.5f ? low : high)[s & 1u]++;
+      }
+      both_sides += (low[0] > 0 && high[0] > 0) + (low[1] > 0 && high[1] > 0);
+      cases += 2;
+    }
+  // Each half of 2-8 stratified points spans both sides of the pixel (a net of >= 2 points).
+  EXPECT_EQ(both_sides, cases);
 }
 
 // Across pixels, every dimension is uniform (chi-square, 10^6 values) and dimensions of

@@ -146,7 +146,7 @@ def test_dirt_gathers_in_creases_by_ambient_occlusion():
 def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
     """scratches(depth > 0): the metal in a scratch follows the groove's walls (bump map of the
     line profile). Rendered with and without depth: pixels showing only the paint (albedo of
-    the base) are bit-identical; pixels in the scratches' walls change."""
+    the base) are identical (to float rounding); pixels in the scratches' walls change."""
     def render(depth):
         s = sg.Scene()
         g = P.plane(4.0, 4.0)
@@ -171,7 +171,8 @@ def test_scratch_depth_tilts_the_normal_only_inside_the_scratches():
         for dx in (-1, 0, 1):
             paint &= np.roll(np.roll(at_paint, dy, axis=0), dx, axis=1)
     assert paint.sum() > 1000 and scratch.sum() > 300, (paint.sum(), scratch.sum())
-    assert np.array_equal(flat[paint], grooved[paint]), "the paint is unchanged"
+    # (Within float rounding: a zero bump still renormalizes the normal, to the last bit.)
+    np.testing.assert_allclose(flat[paint], grooved[paint], rtol=2e-6, atol=0, err_msg="the paint is unchanged")
     changed = np.abs(flat[scratch] - grooved[scratch]).max(axis=-1) > 1e-3
     print(f"\n[scratch depth] {paint.sum()} paint pixels unchanged, {changed.mean():.2f} of {scratch.sum()} scratch pixels changed")
     assert changed.mean() > 0.3, f"only {changed.mean():.2f} of the scratch pixels changed"

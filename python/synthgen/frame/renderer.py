@@ -267,6 +267,9 @@ class FrameRenderer:
             "objects": object_records(objects, keep, layout.dropped, amodal, arrays["instance_id"], camera,
                                       sc.class_names),
             "sampled": spec.sampled, "class_names": list(sc.class_names), "negative": spec.negative,
+            # The render's estimated error against its converged image (from its half-sample
+            # images; after the scene's exposure): synthgen.post.quality.
+            "noise": self._noise(res, rs["spp"], spec.post),
             # What this frame shares with others, for the train/val split (outputs.split): its
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
@@ -305,6 +308,14 @@ class FrameRenderer:
         if fp is not None:  # compositing, camera matching and labels of a photo frame
             timings["photo_s"] = time.perf_counter() - t_render
         return arrays, meta, timings
+
+    @staticmethod
+    def _noise(res: Any, spp: int, post_steps: Any) -> Optional[Dict[str, float]]:
+        from ..post.quality import estimate_noise, exposure_scale
+
+        est = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), int(spp), exposure_scale(post_steps))
+        return None if est is None else {"psnr_db": round(est["psnr_db"], 3), "relmse": float(f"{est['relmse']:.5g}"),
+                                         "spp": int(spp)}
 
     # -- scene set-up of one frame --------------------------------------------------------
     def _set_lights(self, lights: List[PluginSpec]) -> None:
