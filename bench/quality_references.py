@@ -3,9 +3,11 @@
 (tests/python/test_quality_estimate.py) and the speed-accuracy benchmarks: the Ignis Cornell
 box and the `materials` and `sunlit` scenes of bench/vs_cycles.py, frame 0 of
 scenarios/default.yaml and of scenarios/road_signs.yaml -- each at 128 x 96, 4096 spp by default,
-written as float EXR to tests/python/references/quality/<scene>.exr (committed: small).
+written as float EXR to tests/python/references/quality/<scene>.exr (committed: small). The
+scenario scenes render with their scenario's settings (clamp_indirect); --unclamped renders
+them without the clamp, as <scene>_unclamped.exr (what measures the clamp's bias).
 
-    .venv/bin/python bench/quality_references.py [--spp 4096] [--scenes cbox,sunlit] [--out DIR]
+    .venv/bin/python bench/quality_references.py [--spp 4096] [--scenes cbox,sunlit] [--out DIR] [--unclamped]
 
 The scenes are built by :func:`regression_scene` (shared with the tests): one committed scene
 each, rendered with a seed the tests do not use. Prints per scene its render time and the
@@ -53,8 +55,22 @@ def regression_scene(name: str, width: int = SIZE[0], height: int = SIZE[1]) -> 
     return fr.scene, int(sc.spec["render"]["max_depth"]), exposure_scale(meta.get("post", [])), fr
 
 
-def render(scene: Any, spp: int, max_depth: int, seed: int) -> Any:
-    return scene.render(spp=int(spp), max_depth=int(max_depth), seed=int(seed))
+def regression_settings(name: str, scale: float = 1.0) -> dict:
+    """The render settings a regression scene is rendered with besides spp, max_depth and seed:
+    a scenario's own (its render section: clamp_indirect, ...) and the exposure ``scale``
+    (regression_scene's) that its displayed-unit thresholds refer to; none for the bench scenes."""
+    if name in ("cbox", "materials", "sunlit"):
+        return {}
+    from synthgen.scenario import load_scenario
+
+    rs = load_scenario(os.path.join(REPO, "scenarios", f"{name}.yaml")).spec["render"]
+    return {"exposure": float(scale), "clamp_indirect": float(rs["clamp_indirect"])}
+
+
+def render(name: str, scene: Any, spp: int, max_depth: int, seed: int, scale: float = 1.0, **extra: Any) -> Any:
+    """A render of regression scene ``name`` (see regression_settings; ``extra`` overrides)."""
+    kw = dict(regression_settings(name, scale), **extra)
+    return scene.render(spp=int(spp), max_depth=int(max_depth), seed=int(seed), **kw)
 
 
 def write_exr(path: str, rgb: np.ndarray, attrs: dict) -> None:
@@ -78,17 +94,20 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=4096)
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--out", default=REF_DIR)
+    ap.add_argument("--unclamped", action="store_true",
+                    help="render with clamp_indirect 0 (written as <scene>_unclamped.exr: the clamp's bias)")
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     for name in args.scenes.split(","):
         scene, depth, scale, _owner = regression_scene(name)
+        extra = {"clamp_indirect": 0.0} if args.unclamped and regression_settings(name) else {}
         t0 = time.perf_counter()
-        res = render(scene, args.spp, depth, REF_SEED)
+        res = render(name, scene, args.spp, depth, REF_SEED, scale, **extra)
         secs = time.perf_counter() - t0
         est = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), args.spp, scale)
-        path = os.path.join(args.out, f"{name}.exr")
+        path = os.path.join(args.out, f"{name}{'_unclamped' if extra else ''}.exr")
         write_exr(path, np.asarray(res.rgb), {"spp": args.spp, "seed": REF_SEED, "max_depth": depth,
-                                             "exposure_scale": scale})
+                                             "exposure_scale": scale, **regression_settings(name, scale), **extra})
         print(f"{name}: {args.spp} spp in {secs:.1f} s, estimated PSNR {est['psnr_db']:.2f} dB -> {path}")
     return 0
 

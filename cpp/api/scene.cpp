@@ -601,14 +601,23 @@ void Scene::build_render_scene() {
       rs.reflection_lights.push_back(e->object.get());
       continue;
     }
-    if (e->object->is_infinite()) rs.infinite_lights.push_back(uint32_t(rs.lights.size()));
-    rs.lights.push_back(e->object.get());
-    rs.light_in_catcher_layer.push_back(1);
+    for (const Light* part : e->object->parts()) {
+      if (part->is_infinite()) rs.infinite_lights.push_back(uint32_t(rs.lights.size()));
+      rs.lights.push_back(part);
+      rs.light_in_catcher_layer.push_back(1);
+    }
   }
   rs.has_hittable_emitters = !m_area_lights.empty() || !rs.infinite_lights.empty() || !rs.reflection_lights.empty();
-  std::vector<float> power;
-  for (const Light* l : rs.lights) power.push_back(std::max(l->power(), 0.f));
-  rs.light_pick = Distribution1D(power);
+  rs.light_group.clear();
+  std::vector<float> power[RenderScene::k_light_groups];
+  for (int g = 0; g < RenderScene::k_light_groups; ++g) rs.group_lights[g].clear();
+  for (size_t i = 0; i < rs.lights.size(); ++i) {
+    const int g = rs.lights[i]->is_dome() ? 1 : 0;
+    rs.light_group.push_back(uint8_t(g));
+    rs.group_lights[g].push_back(uint32_t(i));
+    power[g].push_back(std::max(rs.lights[i]->power(), 0.f));
+  }
+  for (int g = 0; g < RenderScene::k_light_groups; ++g) rs.group_pick[g] = Distribution1D(power[g]);
   rs.light_weights.clear();
   const float scene_r = std::max(rs.bounds.radius(), 1e-3f);
   for (const Light* l : rs.lights) {

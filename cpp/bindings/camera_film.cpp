@@ -24,6 +24,7 @@ py::dict stats_to_dict(const RenderStats& s) {
   d["top_level_builds"] = s.top_level_builds;
   d["alpha_test_calls"] = s.alpha_test_calls;
   d["threads"] = s.threads;
+  d["estimated_psnr_db"] = s.estimated_psnr_db;
   return d;
 }
 
@@ -168,6 +169,30 @@ void bind_render_result(py::module_& m) {
           "variance", [](std::shared_ptr<Film> f) { return wrap(f, f->variance, {f->height, f->width, 3}); },
           "H x W x 3 float32: the variance of rgb's per-pixel mean (the samples' unbiased variance / their\n"
           "number; 0 with fewer than two samples).")
+      .def_property_readonly(
+          "albedo_even", [](std::shared_ptr<Film> f) { return wrap(f, f->albedo_even, {f->height, f->width, 3}); },
+          "H x W x 3 float32: the denoiser's albedo feature, mean over the even-numbered samples of the albedo\n"
+          "at each sample's first vertex that is not a mirror or glass (escaped samples: 1).")
+      .def_property_readonly(
+          "albedo_odd", [](std::shared_ptr<Film> f) { return wrap(f, f->albedo_odd, {f->height, f->width, 3}); },
+          "H x W x 3 float32: albedo_even over the odd-numbered samples.")
+      .def_property_readonly(
+          "normal_even", [](std::shared_ptr<Film> f) { return wrap(f, f->normal_even, {f->height, f->width, 3}); },
+          "H x W x 3 float32: the denoiser's normal feature (shading normal at that vertex, escaped samples 0),\n"
+          "mean over the even-numbered samples.")
+      .def_property_readonly(
+          "normal_odd", [](std::shared_ptr<Film> f) { return wrap(f, f->normal_odd, {f->height, f->width, 3}); },
+          "H x W x 3 float32: normal_even over the odd-numbered samples.")
+      .def_property_readonly(
+          "depth_even", [](std::shared_ptr<Film> f) { return wrap(f, f->depth_even, {f->height, f->width}); },
+          "H x W float32: the denoiser's depth feature (path length to that vertex in metres; escaped samples\n"
+          "a finite distance beyond the scene), mean over the even-numbered samples.")
+      .def_property_readonly(
+          "depth_odd", [](std::shared_ptr<Film> f) { return wrap(f, f->depth_odd, {f->height, f->width}); },
+          "H x W float32: depth_even over the odd-numbered samples.")
+      .def_property_readonly(
+          "sample_count", [](std::shared_ptr<Film> f) { return wrap(f, f->sample_count, {f->height, f->width}); },
+          "H x W uint32: the samples each pixel got (spp; with adaptive sampling, its own count).")
       .def_property_readonly("differential", [](std::shared_ptr<Film> f) { return f->differential; },
                              "True when the scene had catchers: the five buffers below are filled (else None).")
       .def_property_readonly(

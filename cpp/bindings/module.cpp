@@ -166,6 +166,7 @@ T render_default(const char* name) {
   const ParamDecl* d = Registry::instance().info("render", "path_tracer").find(name);
   if (!d || !d->has_default) throw Error(std::string("render setting '") + name + "' has no declared default");
   if (auto b = std::get_if<bool>(&d->default_value)) return T(*b);
+  if (auto r = std::get_if<double>(&d->default_value)) return T(*r);
   return T(std::get<int64_t>(d->default_value));
 }
 
@@ -452,7 +453,8 @@ a BVH build). render() commits pending edits first.)doc")
       })
       .def("render",
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
-              uint32_t tile_size, bool texture_filtering, bool labels_only) {
+              uint32_t tile_size, bool texture_filtering, float exposure, float clamp_indirect, float noise_threshold,
+              float target_psnr, uint32_t min_spp, uint32_t max_spp, bool labels_only) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -461,6 +463,12 @@ a BVH build). render() commits pending edits first.)doc")
              rs.threads = threads;
              rs.tile_size = tile_size;
              rs.texture_filtering = texture_filtering;
+             rs.exposure = exposure;
+             rs.clamp_indirect = clamp_indirect;
+             rs.noise_threshold = noise_threshold;
+             rs.target_psnr = target_psnr;
+             rs.min_spp = min_spp;
+             rs.max_spp = max_spp;
              rs.labels_only = labels_only;
              auto film = std::make_shared<Film>();
              {
@@ -474,7 +482,12 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("threads") = render_default<uint32_t>("threads"),
            py::arg("tile_size") = render_default<uint32_t>("tile_size"),
            py::arg("texture_filtering") = render_default<bool>("texture_filtering"),
-           py::arg("labels_only") = false,
+           py::arg("exposure") = render_default<float>("exposure"),
+           py::arg("clamp_indirect") = render_default<float>("clamp_indirect"),
+           py::arg("noise_threshold") = render_default<float>("noise_threshold"),
+           py::arg("target_psnr") = render_default<float>("target_psnr"),
+           py::arg("min_spp") = render_default<uint32_t>("min_spp"),
+           py::arg("max_spp") = render_default<uint32_t>("max_spp"), py::arg("labels_only") = false,
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
            "centre ray's coverage).")

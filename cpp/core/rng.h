@@ -6,6 +6,7 @@
 // any thread count or tile order.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #if defined(__GFNI__) && defined(__SSE2__)
 #include <immintrin.h>
@@ -160,10 +161,20 @@ inline uint32_t permute_index(uint32_t i, uint32_t n, uint32_t key) {
 class PixelSampler {
  public:
   PixelSampler() : m_key(0), m_sample(0), m_spp(1), m_mask(0) {}
-  PixelSampler(uint64_t seed, uint64_t pixel_index, uint32_t sample_index, uint32_t spp = 1) {
+  /// `block` (adaptive sampling's rounds; 0: all spp samples are one block): samples
+  /// [b block, (b + 1) block) are randomized on their own, as if the pixel had only those, so
+  /// that a pixel can stop after any whole block. An even block keeps the halves' parity.
+  PixelSampler(uint64_t seed, uint64_t pixel_index, uint32_t sample_index, uint32_t spp = 1, uint32_t block = 0) {
     spp = spp ? spp : 1;
+    uint64_t block_key = 0;
+    if (block && block < spp) {
+      const uint32_t b = sample_index / block;
+      sample_index -= b * block;
+      spp = std::min(block, spp - b * block);
+      block_key = b ? mix64(uint64_t(b) * 0xd1b54a32d192ed03ull) : 0ull;
+    }
     m_half = spp >= 2 ? (sample_index & 1u) : 0u;
-    m_key = mix64(mix64(seed) ^ pixel_index) ^ (m_half ? 0xa0761d6478bd642full : 0ull);
+    m_key = mix64(mix64(seed) ^ pixel_index) ^ (m_half ? 0xa0761d6478bd642full : 0ull) ^ block_key;
     m_sample = spp >= 2 ? sample_index >> 1 : sample_index;
     m_spp = spp >= 2 ? (m_half ? spp / 2 : (spp + 1) / 2) : spp;
     m_mask = permutation_mask(m_spp);

@@ -22,7 +22,10 @@ void Film::allocate(uint32_t w, uint32_t h, bool diff) {
     albedo.assign(3 * n, 0.f);
     instance_id.assign(n, 0u);
     class_id.assign(n, 0u);
-    for (auto* v : {&rgb_even, &rgb_odd, &variance}) v->assign(3 * n, 0.f);
+    for (auto* v : {&rgb_even, &rgb_odd, &variance, &albedo_even, &albedo_odd, &normal_even, &normal_odd})
+      v->assign(3 * n, 0.f);
+    for (auto* v : {&depth_even, &depth_odd}) v->assign(n, 0.f);
+    sample_count.assign(n, 0u);
     differential = diff;
     for (auto* v : {&synthetic_rgb, &catcher_with, &catcher_without, &behind_synthetic}) {
       if (diff) v->assign(3 * n, 0.f);
@@ -33,7 +36,7 @@ void Film::allocate(uint32_t w, uint32_t h, bool diff) {
   } catch (const std::bad_alloc&) {
     *this = Film();
     throw Error("render: cannot allocate the buffers of a " + std::to_string(w) + " x " + std::to_string(h) +
-                " image (" + std::to_string(n * (diff ? 144 : 92) / (1 << 20)) + " MiB): not enough memory");
+                " image (" + std::to_string(n * (diff ? 204 : 152) / (1 << 20)) + " MiB): not enough memory");
   }
 }
 

@@ -21,6 +21,8 @@ struct RenderStats {
   uint64_t top_level_builds = 0;
   uint64_t alpha_test_calls = 0;  ///< candidate hits alpha-tested (cut-outs) during the render
   uint32_t threads = 0;
+  /// Adaptive sampling: the image's estimated PSNR (dB) when it stopped (0 otherwise).
+  double estimated_psnr_db = 0.0;
 };
 
 struct Film {
@@ -41,6 +43,14 @@ struct Film {
   /// of rgb's mean (H x W x 3: the samples' unbiased variance / their number; 0 with fewer
   /// than two samples).
   std::vector<float> rgb_even, rgb_odd, variance;
+  /// The denoiser's features (not in labels-only renders), as the halves' means over their
+  /// samples (so antialiased and, through glass or depth of field, noisy like rgb): albedo,
+  /// shading normal (H x W x 3) and path length to the surface (H x W, metres) of each
+  /// sample's first vertex that is not a Dirac delta (after up to 3 mirror / glass
+  /// bounces); escaped samples count as albedo 1, normal 0, a depth beyond the scene.
+  std::vector<float> albedo_even, albedo_odd, normal_even, normal_odd, depth_even, depth_odd;
+  /// Samples each pixel got (H x W): spp, or with adaptive sampling its own count.
+  std::vector<uint32_t> sample_count;
 
   /// Differential rendering (scenes with catchers, Scene::set_instance_catcher), per pixel,
   /// each the sum over the pixel's valid samples divided by their number. A sample is

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "integrator/interaction.h"
+#include "integrator/adaptive.h"
 #include "integrator/ray_cone.h"
 
 namespace sg {
@@ -32,7 +33,20 @@ PluginInfo render_info() {
       .add(param::integer("seed", 0, "random seed (images are deterministic per seed)").in(0, 18446744073709551615.0))
       .add(param::integer("threads", 0, "worker threads (0: all cores)").in(0, 4096))
       .add(param::integer("tile_size", 16, "tile edge in pixels").in(1, 4096))
-      .add(param::boolean("texture_filtering", true, "filter textures over the ray footprint (ray cones)"));
+      .add(param::boolean("texture_filtering", true, "filter textures over the ray footprint (ray cones)"))
+      .add(param::real("exposure", 1.0, "factor the image is multiplied by when shown (the scene's exposure); "
+                                        "clamp_indirect is in such displayed units").above(0))
+      .add(param::real("noise_threshold", 0.0, "adaptive sampling: a pixel stops once its estimated RMS error "
+                                               "(displayed units, 1 = white) is below this (0.01: about 40 dB; "
+                                               "0: off)").at_least(0))
+      .add(param::real("target_psnr", 0.0, "adaptive sampling: the image stops once its estimated PSNR (dB) "
+                                           "reaches this (0: off)").at_least(0))
+      .add(param::integer("min_spp", 0, "adaptive sampling: samples every pixel gets first (0: max(16, sqrt("
+                                        "max_spp)), rounded up to whole rounds of 16)").in(0, 1 << 20))
+      .add(param::integer("max_spp", 0, "adaptive sampling: most samples of a pixel (0: spp)").in(0, 1 << 20))
+      .add(param::real("clamp_indirect", 0.0, "largest sum of RGB (displayed units, 1 = white) one indirect "
+                                              "contribution of a sample may add; 0: no clamping (removes "
+                                              "fireflies of caustics at the cost of some energy)").at_least(0));
 }
 
 std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const PluginContext&) {
@@ -44,6 +58,12 @@ std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const Pl
   rs->threads = uint32_t(p.get_int("threads"));
   rs->tile_size = uint32_t(p.get_int("tile_size"));
   rs->texture_filtering = p.get_bool("texture_filtering");
+  rs->exposure = p.get_float("exposure");
+  rs->clamp_indirect = p.get_float("clamp_indirect");
+  rs->noise_threshold = p.get_float("noise_threshold");
+  rs->target_psnr = p.get_float("target_psnr");
+  rs->min_spp = uint32_t(p.get_int("min_spp"));
+  rs->max_spp = uint32_t(p.get_int("max_spp"));
   return rs;
 }
 
@@ -59,6 +79,21 @@ void RenderSettings::validate() const {
   if (spp == 0) throw Error("render settings: spp must be at least 1");
   if (max_depth == 0) throw Error("render settings: max_depth must be at least 1");
   if (tile_size == 0) throw Error("render settings: tile_size must be at least 1");
+  if (!(exposure > 0.f) || !std::isfinite(exposure)) throw Error("render settings: exposure must be positive");
+  if (!(clamp_indirect >= 0.f)) throw Error("render settings: clamp_indirect must be 0 (off) or positive");
+  if (!(noise_threshold >= 0.f) || !(target_psnr >= 0.f))
+    throw Error("render settings: noise_threshold and target_psnr must be 0 (off) or positive");
+  if (adaptive() && min_spp && min_spp > max_samples())
+    throw Error("render settings: min_spp (" + std::to_string(min_spp) + ") is more than the most samples a pixel "
+                "gets (max_spp or spp: " + std::to_string(max_samples()) + ")");
+}
+
+uint32_t RenderSettings::min_samples() const {
+  const uint32_t most = max_samples();
+  if (!adaptive()) return most;
+  uint32_t m = min_spp ? min_spp : std::max<uint32_t>(16, uint32_t(std::ceil(std::sqrt(double(most)))));
+  m = (m + adaptive_step() - 1) / adaptive_step() * adaptive_step();
+  return std::min(m, most);
 }
 
 namespace {
@@ -66,8 +101,9 @@ namespace {
 // Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex:
 // (+0, +1) light position, (+2, +3) BSDF direction — the 2D-stratified pairs of
 // PixelSampler — then +4 light choice, +5 BSDF lobe (a pair too), +6 Russian roulette
-// (unstratified).
-constexpr uint32_t k_dims_per_vertex = 8;
+// (unstratified), (+8, +9) the dome light's direction, +10 the dome's choice (a pair with
+// the unused +11): the two light groups' samples (RenderScene::group_lights).
+constexpr uint32_t k_dims_per_vertex = 12;
 
 struct PathCounters {
   uint64_t rays = 0;
@@ -80,12 +116,14 @@ struct PathCounters {
 struct PathState {
   Ray ray;
   Color L{0.f}, beta{1.f};
-  Color shadow_contrib{0.f};  ///< NEE contribution, added if the shadow ray is unoccluded
+  /// NEE contributions of the light groups, each added if its shadow ray is unoccluded.
+  Color shadow_contrib[RenderScene::k_light_groups];
   float prev_pdf = 0.f;
-  /// Where the previous vertex chose its light and the light weights' sum there
-  /// (RenderScene::pick_light): the MIS weight of emission the next segment finds reuses them.
-  Vec3f prev_p{0.f};
-  float prev_light_total = 0.f;
+  /// Where the previous vertex chose its lights, each group's light weights' sum there
+  /// (RenderScene::pick_light) and the normal lights sampled by (LightSampleContext::n): the
+  /// MIS weight of emission the next segment finds reuses them.
+  Vec3f prev_p{0.f}, prev_n{0.f};
+  float prev_light_total[RenderScene::k_light_groups] = {0.f, 0.f};
   uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
   uint32_t bounce = 0;
   bool prev_delta = true;  ///< the camera "sampled" the first direction
@@ -97,6 +135,13 @@ struct PathState {
   float eta_scale = 1.f;
   bool active = true;
   bool hit_geometry = false;
+  /// The denoiser's features of this sample (Film::albedo_even ...): albedo, shading normal
+  /// and path length at its first vertex that is not a Dirac delta (through mirrors and
+  /// glass, at most 3 bounces); the background's (albedo 1, normal 0, far) when it escapes.
+  Color feature_albedo{1.f};
+  Vec3f feature_normal{0.f};
+  float feature_depth = 0.f, path_length = 0.f;
+  bool feature_final = false;
   /// Differential rendering (full-scene pass): the camera ray first hit an inserted
   /// (non-catcher) object; the path met an inserted object somewhere (a hit, a shadow ray it
   /// blocked, its emission sampled), so the path without the objects differs.
@@ -109,13 +154,15 @@ struct PathState {
 /// only on (seed, pixel, bounce), so the lanes of a packet share them.
 struct VertexKeys {
   uint32_t bounce = ~0u;
-  uint64_t light = 0, bsdf = 0, pick_lobe = 0;
+  uint64_t light = 0, bsdf = 0, pick_lobe = 0, dome_light = 0, dome_pick = 0;
   void update(uint32_t b, const PixelSampler& sampler) {
     if (b == bounce) return;
     uint32_t base = 2 + b * k_dims_per_vertex;
     light = sampler.pair_key(base);
     bsdf = sampler.pair_key(base + 2);
     pick_lobe = sampler.pair_key(base + 4);
+    dome_light = sampler.pair_key(base + 8);
+    dome_pick = sampler.pair_key(base + 10);
     bounce = b;
   }
 };
@@ -170,19 +217,24 @@ inline float estimate_edges(const RenderScene& sc, const SurfaceInteraction& si,
 }
 
 /// One pixel's sample statistics: the sums of its even- and odd-numbered samples (by sample
-/// index) and of the squares, in double (the variance is a small difference of large sums).
+/// index) and of the squares, in double (the variance is a small difference of large sums),
+/// and the sums of the halves' denoising features.
 struct PixelMoments {
   double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
   double sq[3] = {0, 0, 0};
   uint32_t n[2] = {0, 0};
+  float albedo[2][3] = {{0, 0, 0}, {0, 0, 0}}, normal[2][3] = {{0, 0, 0}, {0, 0, 0}}, depth[2] = {0, 0};
 
-  void add(uint32_t sample_index, const Color& l) {
+  void add(uint32_t sample_index, const Color& l, const PathState& st, float far) {
     const int h = int(sample_index & 1u);
     const double v[3] = {l.x, l.y, l.z};
     for (int c = 0; c < 3; ++c) {
       sum[h][c] += v[c];
       sq[c] += v[c] * v[c];
+      albedo[h][c] += st.feature_albedo[c];
+      normal[h][c] += st.feature_normal[c];
     }
+    depth[h] += st.feature_depth > 0.f ? st.feature_depth : far;
     ++n[h];
   }
   uint32_t count() const { return n[0] + n[1]; }
@@ -198,7 +250,13 @@ struct PixelMoments {
       film->rgb_odd[3 * pixel + c] = n[1] ? float(sum[1][c] / n[1]) : 0.f;
       double var = total > 1 ? std::max(0.0, (sq[c] - s * mean) / double(total - 1)) / double(total) : 0.0;
       film->variance[3 * pixel + c] = float(var);
+      film->albedo_even[3 * pixel + c] = n[0] ? albedo[0][c] / float(n[0]) : 0.f;
+      film->albedo_odd[3 * pixel + c] = n[1] ? albedo[1][c] / float(n[1]) : 0.f;
+      film->normal_even[3 * pixel + c] = n[0] ? normal[0][c] / float(n[0]) : 0.f;
+      film->normal_odd[3 * pixel + c] = n[1] ? normal[1][c] / float(n[1]) : 0.f;
     }
+    film->depth_even[pixel] = n[0] ? depth[0] / float(n[0]) : 0.f;
+    film->depth_odd[pixel] = n[1] ? depth[1] / float(n[1]) : 0.f;
   }
 };
 
@@ -208,7 +266,28 @@ class PathTracer {
       : m_scene(scene),
         m_s(settings),
         m_pixel_spread(settings.texture_filtering ? pixel_spread_angle(scene.camera) : 0.f),
-        m_sample_spread(m_pixel_spread * camera_sample_spread_scale(settings.spp)) {}
+        m_sample_spread(m_pixel_spread * camera_sample_spread_scale(settings.spp)),
+        m_clamp(settings.clamp_indirect > 0.f ? settings.clamp_indirect / settings.exposure : k_inf),
+        m_max_spp(settings.max_samples()),
+        m_block(settings.adaptive() ? settings.adaptive_step() : 0),
+        m_far(far_feature_depth(scene)) {}
+
+  /// The denoising feature depth of escaped samples: beyond everything in the scene.
+  static float far_feature_depth(const RenderScene& sc) {
+    if (sc.bounds.empty()) return 1.f;
+    return 2.f * (length(sc.camera.position() - sc.bounds.center()) + sc.bounds.radius()) + 1.f;
+  }
+
+  /// A contribution to a sample's radiance: clamped when it is indirect (`vertex`, the index
+  /// of the surface it lights, >= 1: it reached the camera over more than one surface).
+  /// NOTE: as Cycles' sample_clamp_indirect (intern/cycles/kernel/film/light_passes.h,
+  /// film_clamp_light): the contribution is scaled down so that the sum of its channels is at
+  /// most the limit, keeping its colour.
+  Color clamped(const Color& c, uint32_t vertex) const {
+    if (vertex == 0) return c;
+    const float sum = c.x + c.y + c.z;
+    return sum > m_clamp ? c * (m_clamp / sum) : c;
+  }
 
   /// The current ray escaped: infinite lights, MIS-weighted against light sampling.
   void on_miss(PathState& st) const {
@@ -219,24 +298,28 @@ class PathTracer {
       Color le = light->le(st.ray.d);
       if (is_black(le)) continue;
       float w = 1.f;
-      if (!st.prev_delta)
-        w = power_heuristic(st.prev_pdf, sc.light_pmf(st.prev_p, li, st.prev_light_total) * light->pdf_le(st.ray.d));
-      st.L += st.beta * le * w;
+      if (!st.prev_delta) {
+        LightSampleContext ctx{st.prev_p, Vec3f(0.f), st.prev_n};
+        w = power_heuristic(st.prev_pdf, sc.light_pmf(st.prev_p, li, st.prev_light_total[sc.light_group[li]]) *
+                                             light->pdf_li(ctx, st.ray.d));
+      }
+      // The segment from vertex bounce - 1: it lit that vertex.
+      st.L += clamped(st.beta * le * w, st.bounce > 0 ? st.bounce - 1 : 0);
     }
     // Lights only reflections see: no MIS (never sampled), only at the end of a camera path of
     // glossy / specular bounces (what the camera sees reflected; never light on a diffuse surface).
     if (st.bounce > 0 && st.all_glossy)
-      for (const Light* light : sc.reflection_lights) st.L += st.beta * light->le(st.ray.d);
+      for (const Light* light : sc.reflection_lights) st.L += clamped(st.beta * light->le(st.ray.d), st.bounce - 1);
     st.active = false;
   }
 
-  /// The current ray hit a surface: add emission, prepare a shadow ray for next-event
-  /// estimation (returns true and fills `shadow`), and sample the next direction (or end
-  /// the path by clearing `st.active`).
+  /// The current ray hit a surface: add emission, prepare the shadow rays of next-event
+  /// estimation (one per light group: returns a bit mask of the groups whose `shadow[g]` it
+  /// filled), and sample the next direction (or end the path by clearing `st.active`).
   /// `layer`: RayLayer::catchers for the pass without the inserted objects (their lights are
   /// then skipped too); `track` marks in the full-scene pass what the objects change.
-  bool on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow,
-              RayLayer layer, bool track) const {
+  uint32_t on_hit(PathState& st, const RayHit& hit, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow,
+                  RayLayer layer, bool track) const {
     const RenderScene& sc = m_scene;
     if (st.bounce == 0) st.hit_geometry = true;
     const InstanceRecord& inst = sc.instances[hit.inst];
@@ -260,7 +343,7 @@ class PathTracer {
     if (needs & k_needs_edges)
       si.edge = estimate_edges(sc, si, wo, mat->edge_radius(), mat->edge_samples(), sampler,
                                0x10000u + st.bounce * 256u + 200u);
-    bool shadow_requested = false;
+    uint32_t shadow_requested = 0;
 
     // Emission seen by this segment.
     if (traits.emissive) {
@@ -271,51 +354,64 @@ class PathTracer {
         if (!st.prev_delta && li >= 0) {
           float cos_l = std::fabs(dot(si.ng, wo));
           const AreaLight* area = static_cast<const AreaLight*>(sc.lights[size_t(li)]);
-          float pdf_light = sc.light_pmf(st.prev_p, uint32_t(li), st.prev_light_total) * area->area_pdf(hit.prim) *
+          float pdf_light = sc.light_pmf(st.prev_p, uint32_t(li), st.prev_light_total[sc.light_group[size_t(li)]]) *
+                            area->area_pdf(hit.prim) *
                             hit.t * hit.t / cos_l;
           w = power_heuristic(st.prev_pdf, pdf_light);
         }
-        st.L += st.beta * le * w;
+        st.L += clamped(st.beta * le * w, st.bounce > 0 ? st.bounce - 1 : 0);
       }
     }
     uint32_t flags = traits.flags;
+    st.path_length += hit.t;
+    if (!st.feature_final) {
+      st.feature_albedo = mat->albedo(si);
+      st.feature_normal = si.ns;
+      st.feature_depth = st.path_length;
+      st.feature_final = (flags & (k_bsdf_diffuse | k_bsdf_glossy)) || flags == k_bsdf_none || st.bounce >= 3;
+    }
     if (st.segments >= m_s.max_depth || flags == k_bsdf_none) {
       st.active = false;
-      return false;
+      return 0;
     }
     keys.update(st.bounce, sampler);
     const Vec2f u_pick_lobe = sampler.get_2d_keyed(keys.pick_lobe);  // light choice, BSDF lobe
 
-    // Next-event estimation: sample a light, defer the shadow ray.
+    // Next-event estimation: sample a light of each group, defer the shadow rays.
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
     if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
-      float pick_pmf;
-      size_t li = sc.pick_light(si.p, u_pick_lobe.x, &pick_pmf, &st.prev_light_total);
       st.prev_p = si.p;
-      const Light* light = sc.lights[li];
-      // Without the inserted objects their emitters are absent: the same choice adds nothing.
-      const bool light_absent = layer == RayLayer::catchers && !sc.light_in_catcher_layer[li];
-      LightSample ls;
-      LightSampleContext ctx{si.p, si.p_error};
-      if (!light_absent && light->sample(ctx, sampler.get_2d_keyed(keys.light), &ls)) {
+      st.prev_n = (flags & k_bsdf_transmission) ? Vec3f(0.f) : face_forward(si.ns, wo);
+      const LightSampleContext ctx{si.p, si.p_error, st.prev_n};
+      for (int g = 0; g < RenderScene::k_light_groups; ++g) {
+        st.prev_light_total[g] = 0.f;
+        if (sc.group_lights[g].empty()) continue;
+        const float u_pick = g == 0 ? u_pick_lobe.x : sampler.get_2d_keyed(keys.dome_pick).x;
+        float pick_pmf;
+        size_t li = sc.pick_light(g, si.p, u_pick, &pick_pmf, &st.prev_light_total[g]);
+        const Light* light = sc.lights[li];
+        // Without the inserted objects their emitters are absent: the same choice adds nothing.
+        if (layer == RayLayer::catchers && !sc.light_in_catcher_layer[li]) continue;
+        LightSample ls;
+        if (!light->sample(ctx, sampler.get_2d_keyed(g == 0 ? keys.light : keys.dome_light), &ls)) continue;
         float bsdf_pdf;
         Color f = mat->eval_pdf(si, wo, ls.wi, &bsdf_pdf);
-        if (!is_black(f)) {
-          shadow->o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
-          if (ls.infinite) {
-            shadow->d = ls.wi;
-            shadow->t_max = k_inf;
-          } else {
-            Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
-            shadow->d = target - shadow->o;
-            shadow->t_max = 1.f - k_shadow_epsilon;
-          }
-          float light_pdf = pick_pmf * ls.pdf;
-          float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);
-          st.shadow_contrib = st.beta * f * ls.li * (w / light_pdf);
-          shadow_requested = true;
-          if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
+        if (is_black(f)) continue;
+        Ray& sh = shadow[g];
+        sh.o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
+        if (ls.infinite) {
+          sh.d = ls.wi;
+          sh.t_max = k_inf;
+        } else {
+          Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
+          sh.d = target - sh.o;
+          sh.t_max = 1.f - k_shadow_epsilon;
         }
+        float light_pdf = pick_pmf * ls.pdf;
+        float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);
+        st.shadow_contrib[g] = clamped(st.beta * f * ls.li * (w / light_pdf), st.bounce);
+        shadow_requested |= 1u << g;
+        if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
       }
     }
 
@@ -363,7 +459,7 @@ class PathTracer {
     uint64_t pixel_key[2] = {0, 0};  // per half of the samples (PixelSampler::half)
     for (uint32_t i = 0; i < uint32_t(W); ++i) {
       st[i] = PathState();
-      samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_s.spp);
+      samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_max_spp, m_block);
       if (i < 2) pixel_key[samplers[i].half()] = samplers[i].pair_key(0);
       if (i >= n || (lane_on && !lane_on[i])) {
         st[i].active = false;
@@ -391,25 +487,30 @@ class PathTracer {
       HitPacket hp;
       sc.accel->intersect_packet(rays, &hp, layer);
       counters.rays += n_active;
-      RayPacket shadows;
-      uint32_t n_shadow = 0;
+      constexpr int G = RenderScene::k_light_groups;
+      RayPacket shadow_packets[G];
+      uint32_t n_shadow[G] = {0, 0};
       for (int i = 0; i < W; ++i) {
-        shadows.valid[i] = 0;
+        for (int g = 0; g < G; ++g) shadow_packets[g].valid[i] = 0;
         if (!st[i].active) continue;
         if (!hp.found[i]) {
           on_miss(st[i]);
           continue;
         }
-        Ray shadow;
-        if (on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], &shadow, layer, track)) {
-          shadows.set(i, shadow);
-          ++n_shadow;
-        }
+        Ray shadow[G];
+        const uint32_t mask = on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
+        for (int g = 0; g < G; ++g)
+          if (mask & (1u << g)) {
+            shadow_packets[g].set(i, shadow[g]);
+            ++n_shadow[g];
+          }
       }
-      if (n_shadow) {
+      for (int g = 0; g < G; ++g) {
+        if (!n_shadow[g]) continue;
+        const RayPacket& shadows = shadow_packets[g];
         bool occluded[W];
         sc.accel->occluded_packet(shadows, occluded, layer);
-        counters.rays += n_shadow;
+        counters.rays += n_shadow[g];
         if (track) {
           // A shadow ray blocked in the full scene but not by catchers: an inserted object
           // casts this shadow.
@@ -431,24 +532,34 @@ class PathTracer {
           }
         }
         for (int i = 0; i < W; ++i)
-          if (shadows.valid[i] && !occluded[i]) st[i].L += st[i].shadow_contrib;
+          if (shadows.valid[i] && !occluded[i]) st[i].L += st[i].shadow_contrib[g];
       }
     }
   }
 
   /// Traces samples [s0, s0 + n) of pixel (x, y), n <= k_packet_size; adds the valid samples'
   /// radiance to `m` and counts the camera-ray hits.
-  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, PixelMoments* m, uint32_t* hits,
-                    PathCounters& counters) const {
+  /// Per-pixel sums of a plain render.
+  struct PlainSums {
+    PixelMoments m;
+    uint32_t hits = 0;
+    /// Into the film at `pixel`, of a pixel rendered with `spp` samples.
+    void store(Film* film, uint64_t pixel, uint32_t spp) const {
+      m.store(film, pixel);
+      film->alpha[pixel] = float(hits) / float(spp);
+    }
+  };
+
+  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, PlainSums* d, PathCounters& counters) const {
     PathState st[k_packet_size];
     trace_lanes(x, y, s0, n, nullptr, RayLayer::all, false, st, counters);
     for (uint32_t i = 0; i < n; ++i) {
-      *hits += st[i].hit_geometry;
+      d->hits += st[i].hit_geometry;
       if (!is_finite(st[i].L)) {
         ++counters.nan;
         continue;
       }
-      m->add(s0 + i, st[i].L);
+      d->m.add(s0 + i, st[i].L, st[i], m_far);
     }
   }
 
@@ -457,7 +568,29 @@ class PathTracer {
     PixelMoments full;
     Color synthetic{0.f}, with{0.f}, without{0.f}, behind{0.f};
     uint32_t hits = 0, synthetic_n = 0;
+    void store(Film* film, uint64_t pixel, uint32_t spp) const {
+      const uint32_t valid = full.count();
+      const float inv = valid ? 1.f / float(valid) : 0.f;
+      auto put = [&](std::vector<float>& buf, const Color& v) {
+        buf[3 * pixel] = v.x * inv;
+        buf[3 * pixel + 1] = v.y * inv;
+        buf[3 * pixel + 2] = v.z * inv;
+      };
+      // NOTE: rgb divides like the plain path (sum / valid) so that it equals a plain render's.
+      full.store(film, pixel);
+      put(film->synthetic_rgb, synthetic);
+      put(film->catcher_with, with);
+      put(film->catcher_without, without);
+      put(film->behind_synthetic, behind);
+      film->synthetic_alpha[pixel] = float(synthetic_n) * inv;
+      film->alpha[pixel] = float(hits) / float(spp);
+    }
   };
+
+  void trace_packet(uint32_t x, uint32_t y, uint32_t s0, uint32_t n, DifferentialSums* d,
+                    PathCounters& counters) const {
+    trace_packet_differential(x, y, s0, n, d, counters);
+  }
 
   /// Samples [s0, s0 + n) traced in the full scene and, where a path met an inserted object,
   /// again without the objects (same random numbers: common random numbers, so the difference
@@ -482,7 +615,7 @@ class PathTracer {
         ++counters.nan;
         continue;
       }
-      d->full.add(s0 + i, lf);
+      d->full.add(s0 + i, lf, full[i], m_far);
       if (full[i].synthetic_first) {
         d->synthetic += lf;
         d->behind += lw;
@@ -539,6 +672,10 @@ class PathTracer {
   const RenderSettings& m_s;
   float m_pixel_spread;   ///< camera cone spread angle (0 without texture filtering)
   float m_sample_spread;  ///< spread of one path sample's camera cone
+  float m_clamp;          ///< clamp_indirect in radiance units (inf: off)
+  uint32_t m_max_spp;     ///< the most samples a pixel gets
+  uint32_t m_block;       ///< PixelSampler's block (adaptive rounds; 0: one block)
+  float m_far;            ///< feature depth of escaped samples
 };
 
 }  // namespace
@@ -557,56 +694,80 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
   int threads = settings.threads ? std::min(int(settings.threads), hw) : hw;
   tbb::task_arena arena(threads);
   const uint32_t ts = settings.tile_size;
-  arena.execute([&] {
-    tbb::parallel_for(
-        tbb::blocked_range2d<uint32_t>(0, h, ts, 0, w, ts),
-        [&](const tbb::blocked_range2d<uint32_t>& r) {
-          PathCounters c;
-          for (uint32_t y = r.rows().begin(); y < r.rows().end(); ++y)
-            for (uint32_t x = r.cols().begin(); x < r.cols().end(); ++x) {
-              uint64_t pixel = uint64_t(y) * w + x;
-              bool centre_hit = pt.labels(x, y, film, c);
-              if (settings.labels_only) {
-                film->alpha[pixel] = centre_hit ? 1.f : 0.f;
-                continue;
+  const uint32_t most = settings.max_samples();
+  std::vector<uint32_t>& count = film->sample_count;
+  // One round: samples [begin, end) of every pixel still sampling (all in the first round,
+  // which also takes the labels). Without adaptive sampling it is the only round, with each
+  // pixel's sums on the stack; with it, the sums persist between rounds.
+  std::vector<uint8_t> active;
+  std::vector<PathTracer::PlainSums> plain_sums;
+  std::vector<PathTracer::DifferentialSums> differential_sums;
+  const bool adaptive = settings.adaptive() && !settings.labels_only;
+  if (adaptive) {
+    if (differential) differential_sums.resize(size_t(w) * h);
+    else plain_sums.resize(size_t(w) * h);
+  }
+  auto round = [&](uint32_t begin, uint32_t end) {
+    arena.execute([&] {
+      tbb::parallel_for(
+          tbb::blocked_range2d<uint32_t>(0, h, ts, 0, w, ts),
+          [&](const tbb::blocked_range2d<uint32_t>& r) {
+            PathCounters c;
+            auto trace = [&](auto& sums, uint32_t x, uint32_t y, uint64_t pixel) {
+              for (uint32_t s0 = begin; s0 < end; s0 += k_packet_size)
+                pt.trace_packet(x, y, s0, std::min<uint32_t>(k_packet_size, end - s0), &sums, c);
+              sums.store(film, pixel, end);
+              count[pixel] = end;
+            };
+            for (uint32_t y = r.rows().begin(); y < r.rows().end(); ++y)
+              for (uint32_t x = r.cols().begin(); x < r.cols().end(); ++x) {
+                uint64_t pixel = uint64_t(y) * w + x;
+                if (begin == 0) {
+                  bool centre_hit = pt.labels(x, y, film, c);
+                  if (settings.labels_only) {
+                    film->alpha[pixel] = centre_hit ? 1.f : 0.f;
+                    continue;
+                  }
+                } else if (!active[pixel]) {
+                  continue;
+                }
+                if (adaptive) {
+                  if (differential) trace(differential_sums[pixel], x, y, pixel);
+                  else trace(plain_sums[pixel], x, y, pixel);
+                } else if (differential) {
+                  PathTracer::DifferentialSums d;
+                  trace(d, x, y, pixel);
+                } else {
+                  PathTracer::PlainSums d;
+                  trace(d, x, y, pixel);
+                }
               }
-              if (differential) {
-                PathTracer::DifferentialSums d;
-                for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
-                  pt.trace_packet_differential(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &d, c);
-                const uint32_t valid = d.full.count();
-                const float inv = valid ? 1.f / float(valid) : 0.f;
-                auto put = [&](std::vector<float>& buf, const Color& v) {
-                  buf[3 * pixel] = v.x * inv;
-                  buf[3 * pixel + 1] = v.y * inv;
-                  buf[3 * pixel + 2] = v.z * inv;
-                };
-                // NOTE: rgb divides like the plain path (sum / valid) so that it equals a plain render's.
-                d.full.store(film, pixel);
-                put(film->synthetic_rgb, d.synthetic);
-                put(film->catcher_with, d.with);
-                put(film->catcher_without, d.without);
-                put(film->behind_synthetic, d.behind);
-                film->synthetic_alpha[pixel] = float(d.synthetic_n) * inv;
-                film->alpha[pixel] = float(d.hits) / float(settings.spp);
-                continue;
-              }
-              PixelMoments m;
-              uint32_t hits = 0;
-              for (uint32_t s0 = 0; s0 < settings.spp; s0 += k_packet_size)
-                pt.trace_packet(x, y, s0, std::min<uint32_t>(k_packet_size, settings.spp - s0), &m, &hits, c);
-              m.store(film, pixel);
-              film->alpha[pixel] = float(hits) / float(settings.spp);
-            }
-          rays += c.rays;
-          nans += c.nan;
-        },
-        tbb::simple_partitioner());
-  });
+            rays += c.rays;
+            nans += c.nan;
+          },
+          tbb::simple_partitioner());
+    });
+  };
+  uint32_t done = settings.labels_only ? 0 : settings.min_samples();
+  round(0, std::max(done, 1u));
+  if (adaptive) {
+    // NOTE: rounds over the whole image, then the stopping test (integrator/adaptive.h): the
+    // pixels that sample again depend only on the film, so images stay independent of threads.
+    active.assign(size_t(w) * h, 1);
+    AdaptiveStop stop(settings);
+    while (done < most && stop.keep_going(*film, &active)) {
+      const uint32_t next = std::min(done + RenderSettings::adaptive_step(), most);
+      round(done, next);
+      done = next;
+    }
+    film->stats.estimated_psnr_db = stop.last_psnr_db();
+  }
   double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   RenderStats& st = film->stats;
   st.wall_time_s = secs;
-  st.samples = settings.labels_only ? 0 : uint64_t(w) * h * settings.spp;
+  st.samples = 0;
+  if (!settings.labels_only)
+    for (uint32_t n : count) st.samples += n;
   st.rays = rays.load();
   st.nan_samples = nans.load();
   st.samples_per_s = secs > 0 ? double(st.samples) / secs : 0.0;

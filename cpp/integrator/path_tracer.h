@@ -21,6 +21,30 @@ struct RenderSettings {
   /// Filter texture lookups over the ray-cone footprint (integrator/ray_cone.h); false =
   /// point-sampled (bilinear, finest mip level) textures.
   bool texture_filtering = true;
+  /// The factor the image is multiplied by before it is shown (a scene's exposure): the
+  /// thresholds below are in such displayed units (1 = white).
+  float exposure = 1.f;
+  /// Largest sum of RGB (displayed units) that one indirect contribution of a sample may add
+  /// (light that reached the camera over more than one surface: caustics, bright
+  /// interreflections); 0 = no clamping. Trades fireflies for a bias (energy lost), as Cycles'
+  /// "clamp indirect".
+  float clamp_indirect = 0.f;
+  /// Adaptive sampling (integrator/adaptive.h): with noise_threshold > 0 a pixel stops once its
+  /// estimated RMS error (displayed units, clamped to [0, 1], over its 3 x 3 neighbourhood) is below
+  /// it; with target_psnr > 0 the
+  /// whole image stops once its estimated PSNR (synthgen.post.quality's definition) reaches
+  /// it. Pixels then get between min_spp (0: max(16, sqrt(max))) and max_spp (0: spp)
+  /// samples, in rounds of adaptive_step() samples. Labels are unaffected.
+  float noise_threshold = 0.f;
+  float target_psnr = 0.f;
+  uint32_t min_spp = 0, max_spp = 0;
+  bool adaptive() const { return noise_threshold > 0.f || target_psnr > 0.f; }
+  /// The most samples a pixel gets.
+  uint32_t max_samples() const { return adaptive() && max_spp ? max_spp : spp; }
+  /// Samples per adaptive round (a pixel stops only after whole rounds).
+  static constexpr uint32_t adaptive_step() { return 16; }
+  /// The samples every pixel gets before adaptive stopping, a whole number of rounds.
+  uint32_t min_samples() const;
   /// Only the label outputs (depth, normal, albedo, ids, from the pixel-centre ray); rgb is
   /// left 0 and alpha is 1 where the pixel-centre ray hits. For masks (e.g. amodal ones).
   bool labels_only = false;

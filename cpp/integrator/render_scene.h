@@ -43,9 +43,16 @@ struct RenderScene {
   /// Per light: 1 when it exists without the inserted objects (lights of the scene, area lights
   /// of catchers), 0 for the emitters of inserted objects (their headlamps).
   std::vector<char> light_in_catcher_layer;
-  /// Lights by power over the whole scene: the choice when there are too many lights to weigh
-  /// at each shading point (pick_light).
-  Distribution1D light_pick;
+  /// Next-event estimation samples one light of each group at every vertex: group 1 holds
+  /// the domes (Light::is_dome: lights over the whole sky), group 0 all other lights (a sun,
+  /// lamps, emitters). A sunlit point then always gets a sun sample and a sky sample, each
+  /// by its own strategy, rather than one or the other by chance.
+  static constexpr int k_light_groups = 2;
+  std::vector<uint8_t> light_group;                   ///< per light: 0 or 1
+  std::vector<uint32_t> group_lights[k_light_groups];  ///< indices into `lights`
+  /// Per group, its lights by power over the whole scene: the choice when there are too many
+  /// lights to weigh at each shading point (pick_light).
+  Distribution1D group_pick[k_light_groups];
   /// Per light, what pick_light weighs: flux density at distance d of a light with a place
   /// (power / (4 pi max(d^2, radius^2)), the sphere holding it), or at any point (power /
   /// (pi R^2), R the scene's radius: infinite lights, and lights without a place).
@@ -61,7 +68,8 @@ struct RenderScene {
     float cone_angle = k_pi;
   };
   std::vector<LightWeight> light_weights;
-  /// Up to this many lights are weighed at each shading point; more fall back to light_pick.
+  /// Up to this many lights of a group are weighed at each shading point; more fall back to
+  /// group_pick.
   static constexpr size_t k_max_weighed_lights = 16;
   std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
   /// Infinite lights seen only by glossy / specular bounces (Light::reflection_only); not in
@@ -75,27 +83,29 @@ struct RenderScene {
   /// Some instance is a catcher: render differentially (Film::differential).
   bool has_catchers = false;
 
-  /// Chooses a light for next-event estimation at p (u in [0, 1)), returning its index and
-  /// its probability in *pmf.
+  /// Chooses a light of group g for next-event estimation at p (u in [0, 1)), returning its
+  /// index into `lights` and its probability within the group in *pmf.
   /// NOTE: lights are weighed by the flux density each brings to p, isotropic and unoccluded
   /// (a one-level version of the light trees of Conty Estevez & Kulla 2018, "Importance
   /// Sampling of Many Lights with Adaptive Tree Splitting", and pbrt-v4's BVHLightSampler):
   /// by power alone, a car's small, bright lamps next to a sky whose power is counted over
   /// the whole scene are never chosen, and their light arrives only through BSDF-sampled hits,
   /// as fireflies.
-  /// `total` (when given) receives the weights' sum at p, from which light_pmf(p, li, total)
-  /// gives any light's probability at p without weighing them all again.
-  size_t pick_light(const Vec3f& p, float u, float* pmf, float* total = nullptr) const {
-    const size_t n = lights.size();
+  /// `total` (when given) receives the group's weights' sum at p, from which
+  /// light_pmf(p, li, total) gives any of its lights' probability at p without weighing them
+  /// all again.
+  size_t pick_light(int g, const Vec3f& p, float u, float* pmf, float* total = nullptr) const {
+    const std::vector<uint32_t>& ls = group_lights[g];
+    const size_t n = ls.size();
     if (total) *total = 0.f;
     if (n == 1) {
       *pmf = 1.f;
-      return 0;
+      return ls[0];
     }
-    if (n > k_max_weighed_lights) return light_pick.sample(u, pmf);
+    if (n > k_max_weighed_lights) return ls[group_pick[g].sample(u, pmf)];
     float w[k_max_weighed_lights];
-    float sum = weigh_lights(p, w);
-    if (!(sum > 0.f)) return light_pick.sample(u, pmf);
+    float sum = weigh_lights(g, p, w);
+    if (!(sum > 0.f)) return ls[group_pick[g].sample(u, pmf)];
     if (total) *total = sum;
     float target = u * sum, acc = 0.f;
     size_t i = 0;
@@ -105,25 +115,35 @@ struct RenderScene {
     }
     while (w[i] <= 0.f && i > 0) --i;  // rounding at the top end: the last light with weight
     *pmf = w[i] / sum;
-    return i;
+    return ls[i];
   }
-  /// The probability that pick_light(p, ...) chooses light li.
+  /// The probability that pick_light(group of li, p, ...) chooses light li.
   float light_pmf(const Vec3f& p, uint32_t li) const {
-    if (lights.size() == 1) return 1.f;
-    if (lights.size() > k_max_weighed_lights) return light_pick.pmf(li);
+    const int g = light_group[li];
+    const size_t n = group_lights[g].size();
+    if (n == 1) return 1.f;
+    if (n > k_max_weighed_lights) return group_pmf(li);
     float w[k_max_weighed_lights];
-    return light_pmf(p, li, weigh_lights(p, w));
+    return light_pmf(p, li, weigh_lights(g, p, w));
   }
-  /// light_pmf with the weights' sum at p that pick_light(p, ...) returned (0: the power
-  /// distribution was used there).
+  /// light_pmf with the weights' sum at p of li's group that pick_light(...) returned (0: the
+  /// power distribution was used there).
   float light_pmf(const Vec3f& p, uint32_t li, float total) const {
-    if (lights.size() == 1) return 1.f;
-    if (!(total > 0.f)) return light_pick.pmf(li);
+    if (group_lights[light_group[li]].size() == 1) return 1.f;
+    if (!(total > 0.f)) return group_pmf(li);
     return light_weight(li, p) / total;
   }
-  float weigh_lights(const Vec3f& p, float* w) const {
+  /// Light li's probability in its group's power distribution.
+  float group_pmf(uint32_t li) const {
+    const std::vector<uint32_t>& ls = group_lights[light_group[li]];
+    for (size_t k = 0; k < ls.size(); ++k)
+      if (ls[k] == li) return group_pick[light_group[li]].pmf(k);
+    return 0.f;
+  }
+  float weigh_lights(int g, const Vec3f& p, float* w) const {
     float total = 0.f;
-    for (size_t i = 0; i < lights.size(); ++i) total += (w[i] = light_weight(i, p));
+    const std::vector<uint32_t>& ls = group_lights[g];
+    for (size_t i = 0; i < ls.size(); ++i) total += (w[i] = light_weight(ls[i], p));
     return total;
   }
   /// What pick_light weighs light i by at p.

@@ -102,6 +102,7 @@ class EnvMapLight final : public Light {
   /// through the scene's cross-section, integrated over all directions.
   float power() const override { return 4.f * k_pi * k_pi * m_radius * m_radius * m_sampler.mean(); }
   bool is_infinite() const override { return true; }
+  bool is_dome() const override { return true; }
   bool visible_to_camera() const override { return m_visible; }
   bool reflection_only() const override { return m_reflection_only; }
   void set_reflection_only(bool r) { m_reflection_only = r; }

@@ -27,6 +27,10 @@ struct Bounds3 {
 struct LightSampleContext {
   Vec3f p;
   Vec3f p_error;
+  /// The shading normal on the side the surface reflects to, when it only reflects (zero
+  /// otherwise, and away from surfaces): lights whose light spans the sky may sample their
+  /// directions by the cosine around it (Light::pdf_li).
+  Vec3f n{0.f};
 };
 
 struct LightSample {
@@ -50,8 +54,19 @@ class Light {
   virtual bool is_infinite() const { return false; }
   /// Infinite lights: radiance arriving along -dir, i.e. seen when looking along `dir`.
   virtual Color le(const Vec3f& dir) const { return Color(0.f); }
-  /// Infinite lights: solid-angle pdf with which `sample` produces `dir`.
+  /// Infinite lights: solid-angle pdf with which `sample` produces `dir`, for a context
+  /// without a normal (see pdf_li).
   virtual float pdf_le(const Vec3f& dir) const { return 0.f; }
+  /// Infinite lights: solid-angle pdf with which `sample(ctx, ...)` produces `dir` (lights
+  /// that sample by the context's normal depend on it; the others return pdf_le(dir)).
+  virtual float pdf_li(const LightSampleContext& ctx, const Vec3f& dir) const { return pdf_le(dir); }
+  /// A light over the whole sky ("environment", "envmap", the dome of "sky"): next-event
+  /// estimation samples such lights at every vertex apart from the others (a sun, lamps),
+  /// each set by its own strategy, combined with BSDF sampling by MIS (RenderScene groups).
+  virtual bool is_dome() const { return false; }
+  /// The lights the renderer samples in this one's place: itself, or its parts sampled apart
+  /// ("sky": its dome and its sun). Parts live as long as this light.
+  virtual std::vector<const Light*> parts() const { return {this}; }
   /// Infinite lights: whether camera rays see le() directly (false hides an environment
   /// from the camera while it still lights the scene and shows in reflections).
   virtual bool visible_to_camera() const { return true; }

@@ -313,9 +313,63 @@ class SkyLight final : public Light {
     if (!m_sun) return p;
     return (1.f - m_sun_prob) * p + m_sun_prob * m_sun->pdf_le(dir);
   }
-  void preprocess(const Bounds3& b) override { m_radius = std::max(b.radius(), 1e-3f); }
+  void preprocess(const Bounds3& b) override {
+    m_radius = std::max(b.radius(), 1e-3f);
+    if (m_sun) m_sun->preprocess(b);
+  }
+  bool is_dome() const override { return true; }
+  /// With its sun: the dome and the sun, sampled apart by the renderer (each at every vertex,
+  /// RenderScene's light groups); sample() / le() / pdf_le() above are their mixture.
+  std::vector<const Light*> parts() const override {
+    if (!m_sun) return {this};
+    return {&m_dome_part, &m_sun_part};
+  }
 
  private:
+  /// The sky and ground without the sun, sampled by the table.
+  class DomePart final : public Light {
+   public:
+    explicit DomePart(const SkyLight& sky) : m_sky(sky) {}
+    bool sample(const LightSampleContext&, const Vec2f& u, LightSample* out) const override {
+      Vec3f wi = normalize(m_sky.m_sampler.sample(u));
+      float pdf = m_sky.m_sampler.pdf(wi);
+      if (!(pdf > 0.f)) return false;
+      out->wi = wi;
+      out->li = m_sky.sky_radiance(wi);
+      out->pdf = pdf;
+      out->delta = false;
+      out->infinite = true;
+      out->p_light_error = Vec3f(0.f);
+      out->n_light = Vec3f(0.f);
+      return true;
+    }
+    float power() const override { return k_pi * m_sky.m_radius * m_sky.m_radius * m_sky.m_sky_power; }
+    bool is_infinite() const override { return true; }
+    bool is_dome() const override { return true; }
+    bool visible_to_camera() const override { return m_sky.m_visible; }
+    Color le(const Vec3f& dir) const override { return m_sky.sky_radiance(dir); }
+    float pdf_le(const Vec3f& dir) const override { return m_sky.m_sampler.pdf(dir); }
+
+   private:
+    const SkyLight& m_sky;
+  };
+  /// The sun disc, seen by the camera as the sky is.
+  class SunPart final : public Light {
+   public:
+    explicit SunPart(const SkyLight& sky) : m_sky(sky) {}
+    bool sample(const LightSampleContext& ctx, const Vec2f& u, LightSample* out) const override {
+      return m_sky.m_sun->sample(ctx, u, out);
+    }
+    float power() const override { return m_sky.m_sun->power(); }
+    bool is_infinite() const override { return true; }
+    bool visible_to_camera() const override { return m_sky.m_visible; }
+    Color le(const Vec3f& dir) const override { return m_sky.m_sun->le(dir); }
+    float pdf_le(const Vec3f& dir) const override { return m_sky.m_sun->pdf_le(dir); }
+
+   private:
+    const SkyLight& m_sky;
+  };
+
   /// Sky (above the horizon) or ground (below) radiance along the unit direction d.
   Color sky_radiance(const Vec3f& d) const { return sky_radiance_d(d.x, d.y, d.z); }
   Color sky_radiance_d(double dx, double dy, double dz) const {
@@ -342,6 +396,8 @@ class SkyLight final : public Light {
   float m_sky_power = 0.f, m_sun_power = 0.f;
   float m_radius = 1.f;
   bool m_visible;
+  DomePart m_dome_part{*this};
+  SunPart m_sun_part{*this};
 };
 
 namespace {

@@ -70,8 +70,8 @@ class StrokesTexture final : public PointTexture {
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           uint64_t cell = mix64(m_c.seed * 0xD1B54A32D192ED03ull ^
-                                (uint64_t(uint32_t(cx + dx)) | (uint64_t(uint32_t(cy + dy)) << 21) ^
-                                 (uint64_t(uint32_t(cz + dz)) << 42)));
+                                (uint64_t(uint32_t(cx + dx)) | ((uint64_t(uint32_t(cy + dy)) << 21) ^
+                                                                 (uint64_t(uint32_t(cz + dz)) << 42))));
           for (int s = 0; s < m_c.density; ++s) {
             uint64_t k = uint64_t(s) * 16;
             Vec3f c(float(cx + dx) + unit_float(cell, k), float(cy + dy) + unit_float(cell, k + 1),

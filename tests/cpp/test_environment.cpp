@@ -1,5 +1,5 @@
 // Light "environment" (light/environment.cpp): constant radiance from every direction,
-// sampled uniformly over the sphere.
+// sampled uniformly over the sphere, or by the cosine around the shading point's normal.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -71,6 +71,59 @@ TEST(environment, sample_direction_chi2) {
   EXPECT_NEAR(sum(exp) / n, 1.0, 1e-5) << "pdf_le does not integrate to 1";
   Chi2Result r = chi2_test(obs, exp);
   EXPECT_TRUE(r.ok) << r.message;
+}
+
+// With a normal in the context: directions cosine-distributed around it (chi-square against
+// pdf_li in cells around the normal), each sample's pdf equal to pdf_li, pdf_li a density
+// (integrates to 1), zero below the normal's horizon; the sky is a dome light.
+TEST(environment, cosine_sampling_around_the_normal_chi2) {
+  auto env = make_env();
+  EXPECT_TRUE(env->is_dome());
+  const DVec3 n = dnormalize({0.2, 0.7, -0.4});
+  LightSampleContext ctx{Vec3f(1.f, 2.f, 3.f), Vec3f(0.f), to_f(n)};
+  DFrame frame(n);
+  Grid2D g{32, 64, -1.0, 1.0, 0.0, 2.0 * k_pi_d};
+  const int samples = 1000000;
+  Pcg32 rng(604);
+  std::vector<double> obs(g.size(), 0.0);
+  int bad_pdf = 0;
+  for (int i = 0; i < samples; ++i) {
+    LightSample ls;
+    if (!env->sample(ctx, rng.next_2d(), &ls)) continue;
+    bad_pdf += ls.pdf != env->pdf_li(ctx, ls.wi);
+    EXPECT_GT(ddot(n, to_d(ls.wi)), 0.0);
+    double z, phi;
+    sphere_coords(frame, to_d(ls.wi), &z, &phi);
+    obs[size_t(g.cell(z, phi))] += 1.0;
+  }
+  EXPECT_EQ(bad_pdf, 0);
+  auto exp = expected_counts(
+      g, [&](double z, double phi) { return double(env->pdf_li(ctx, to_f(sphere_dir(frame, z, phi)))); }, samples);
+  EXPECT_NEAR(sum(exp) / samples, 1.0, 1e-4) << "pdf_li does not integrate to 1";
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+  EXPECT_EQ(env->pdf_li(ctx, -to_f(n)), 0.f);
+  // Without a normal: the uniform sphere, as pdf_le.
+  LightSampleContext bare{Vec3f(0.f), Vec3f(0.f)};
+  EXPECT_EQ(env->pdf_li(bare, -to_f(n)), env->pdf_le(-to_f(n)));
+}
+
+// Energy: with the cosine strategy every sample of the irradiance on a plane facing the normal
+// is exactly pi L (zero variance), the estimate the renderer gets from a constant sky.
+TEST(environment, cosine_sampling_gives_irradiance_without_variance) {
+  auto env = make_env();
+  const DVec3 n = dnormalize({1, -2, 0.5});
+  LightSampleContext ctx{Vec3f(0.f), Vec3f(0.f), to_f(n)};
+  Pcg32 rng(605);
+  int used = 0;
+  for (int i = 0; i < 100000; ++i) {
+    LightSample ls;
+    if (!env->sample(ctx, rng.next_2d(), &ls)) continue;
+    ++used;
+    double c = ddot(n, to_d(ls.wi));
+    for (int k = 0; k < 3; ++k) ASSERT_NEAR(double(ls.li[k]) * c / double(ls.pdf) / (k_pi_d * k_radiance[k]), 1.0, 2e-5);
+  }
+  EXPECT_GT(used, 99990);
 }
 
 TEST(environment, irradiance_on_a_plane_is_pi_l) {

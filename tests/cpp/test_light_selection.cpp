@@ -1,8 +1,10 @@
 // Light selection (api/scene.cpp, integrator/render_scene.h): next-event estimation picks a
 // light at a shading point by the flux density it brings there (RenderScene::pick_light:
 // power / 4 pi d^2 for lights with a place, power per scene disc for the others); beyond
-// k_max_weighed_lights, by power alone (RenderScene::light_pick). Both are checked: picks in
-// proportion (chi-square), pmf consistent with the choice, near lights preferred.
+// k_max_weighed_lights, by power alone (RenderScene::group_pick). Lights come in two groups,
+// each sampled at every vertex: domes (whole-sky lights) and all others. Checked: picks in
+// proportion within each group (chi-square), pmf consistent with the choice, near lights
+// preferred, the groups' members.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -40,18 +42,20 @@ ParamSet spot(double intensity) {
   return p;
 }
 
-/// Picks `n` lights through the scene's distribution and compares the counts with the
-/// expected proportions (chi-square).
-void expect_proportional_picks(const RenderScene& rs, const std::vector<double>& power, uint64_t seed) {
-  ASSERT_EQ(rs.lights.size(), power.size());
+/// Picks `n` lights through group g's power distribution and compares the counts with the
+/// expected proportions (chi-square); `power` lists the group's lights' powers in order.
+void expect_proportional_picks(const RenderScene& rs, int g, const std::vector<double>& power, uint64_t seed) {
+  ASSERT_EQ(rs.group_lights[g].size(), power.size());
   double total = 0.0;
   for (double p : power) total += p;
-  for (size_t i = 0; i < power.size(); ++i)
-    EXPECT_NEAR(rs.light_pick.pmf(i), power[i] / total, 1e-6 + 1e-5 * power[i] / total) << "light " << i;
+  for (size_t i = 0; i < power.size(); ++i) {
+    EXPECT_NEAR(rs.group_pick[g].pmf(i), power[i] / total, 1e-6 + 1e-5 * power[i] / total) << "light " << i;
+    EXPECT_NEAR(rs.group_pmf(rs.group_lights[g][i]), power[i] / total, 1e-6 + 1e-5 * power[i] / total);
+  }
   const int n = 1000000;
   Pcg32 rng(seed);
   std::vector<double> obs(power.size(), 0.0), exp(power.size());
-  for (int i = 0; i < n; ++i) obs[rs.light_pick.sample(rng.next_float())] += 1.0;
+  for (int i = 0; i < n; ++i) obs[rs.group_pick[g].sample(rng.next_float())] += 1.0;
   for (size_t i = 0; i < power.size(); ++i) exp[i] = n * power[i] / total;
   Chi2Result r = chi2_test(obs, exp);
   EXPECT_TRUE(r.ok) << r.message;
@@ -68,11 +72,13 @@ TEST(light_selection, strong_and_weak_lights_are_picked_in_proportion) {
   const RenderScene& rs = s.render_scene();
   // Same cone: powers in the ratio of the intensities.
   EXPECT_NEAR(rs.lights[strong]->power() / rs.lights[weak]->power(), 100.0, 1e-3);
-  expect_proportional_picks(rs, {rs.lights[strong]->power(), rs.lights[weak]->power()}, 901);
+  ASSERT_EQ(rs.group_lights[0], (std::vector<uint32_t>{strong, weak}));
+  expect_proportional_picks(rs, 0, {rs.lights[strong]->power(), rs.lights[weak]->power()}, 901);
 }
 
-// Power estimates of all light kinds are on one scale: a light's share of the picks is its
-// power, and lights that deliver the same flux to the scene get the same estimate.
+// Power estimates of all light kinds are on one scale: a light's share of its group's picks is
+// its power, and lights that deliver the same flux to the scene get the same estimate. The
+// domes ("environment", the sky's dome) form one group, the rest (the sky's sun too) the other.
 TEST(light_selection, all_light_kinds_share_one_scale) {
   Scene s;
   s.add_instance(s.add_mesh(ground_quad()), Transform());
@@ -94,12 +100,19 @@ TEST(light_selection, all_light_kinds_share_one_scale) {
   s.add_light("sky", sky);
   s.commit();
   const RenderScene& rs = s.render_scene();
-  std::vector<double> power;
-  for (const Light* l : rs.lights) {
-    EXPECT_GT(l->power(), 0.f);
-    power.push_back(l->power());
+  // point, spot, sun, environment, then the sky's parts: its dome and its sun.
+  ASSERT_EQ(rs.lights.size(), 6u);
+  EXPECT_EQ(rs.group_lights[0], (std::vector<uint32_t>{0, 1, 2, 5}));
+  EXPECT_EQ(rs.group_lights[1], (std::vector<uint32_t>{3, 4}));
+  EXPECT_EQ(rs.infinite_lights, (std::vector<uint32_t>{2, 3, 4, 5}));
+  for (int g = 0; g < 2; ++g) {
+    std::vector<double> power;
+    for (uint32_t li : rs.group_lights[g]) {
+      EXPECT_GT(rs.lights[li]->power(), 0.f);
+      power.push_back(rs.lights[li]->power());
+    }
+    expect_proportional_picks(rs, g, power, 902 + 100 * g);
   }
-  expect_proportional_picks(rs, power, 902);
   // The scene's bounding sphere has radius 2 sqrt(2): pi r^2 x irradiance for the sun,
   // pi r^2 x 4 pi L for a uniform environment; a point light radiates 4 pi I.
   double r2 = 8.0;
@@ -110,14 +123,22 @@ TEST(light_selection, all_light_kinds_share_one_scale) {
 
 namespace {
 
-/// pick_light at p against the flux-density weights (chi-square), and light_pmf against the
-/// pmf pick_light returns.
-void expect_weighted_picks(const RenderScene& rs, const Vec3f& p, uint64_t seed) {
-  const size_t n_l = rs.lights.size();
+/// pick_light of group g at p against the flux-density weights (chi-square), and light_pmf
+/// against the pmf pick_light returns.
+void expect_weighted_picks_in_group(const RenderScene& rs, int g, const Vec3f& p, uint64_t seed) {
+  const std::vector<uint32_t>& members = rs.group_lights[g];
+  const size_t n_l = members.size();
+  if (n_l == 1) {  // the group's one light, always
+    float pmf;
+    EXPECT_EQ(rs.pick_light(g, p, 0.5f, &pmf), members[0]);
+    EXPECT_EQ(pmf, 1.f);
+    EXPECT_EQ(rs.light_pmf(p, members[0]), 1.f);
+    return;
+  }
   std::vector<double> w(n_l);
   double total = 0.0;
   for (size_t i = 0; i < n_l; ++i) {
-    const auto& lw = rs.light_weights[i];
+    const auto& lw = rs.light_weights[members[i]];
     Vec3f d = p - lw.centre;
     double d2 = dot(d, d);
     w[i] = lw.local ? lw.power / (4.0 * k_pi_d * std::max(d2, double(lw.radius2))) : lw.power;
@@ -132,8 +153,8 @@ void expect_weighted_picks(const RenderScene& rs, const Vec3f& p, uint64_t seed)
   }
   double sum = 0.0;
   for (size_t i = 0; i < n_l; ++i) {
-    EXPECT_NEAR(rs.light_pmf(p, uint32_t(i)), w[i] / total, 1e-6) << "light " << i;
-    sum += rs.light_pmf(p, uint32_t(i));
+    EXPECT_NEAR(rs.light_pmf(p, members[i]), w[i] / total, 1e-6) << "light " << members[i];
+    sum += rs.light_pmf(p, members[i]);
   }
   EXPECT_NEAR(sum, 1.0, 1e-5);
   const int n = 400000;
@@ -141,9 +162,10 @@ void expect_weighted_picks(const RenderScene& rs, const Vec3f& p, uint64_t seed)
   std::vector<double> obs(n_l, 0.0), exp(n_l);
   for (int k = 0; k < n; ++k) {
     float pmf;
-    size_t i = rs.pick_light(p, rng.next_float(), &pmf);
+    size_t li = rs.pick_light(g, p, rng.next_float(), &pmf);
+    size_t i = size_t(std::find(members.begin(), members.end(), uint32_t(li)) - members.begin());
     ASSERT_LT(i, n_l);
-    EXPECT_FLOAT_EQ(pmf, rs.light_pmf(p, uint32_t(i)));
+    EXPECT_FLOAT_EQ(pmf, rs.light_pmf(p, uint32_t(li)));
     obs[i] += 1.0;
   }
   for (size_t i = 0; i < n_l; ++i) exp[i] = n * w[i] / total;
@@ -151,9 +173,15 @@ void expect_weighted_picks(const RenderScene& rs, const Vec3f& p, uint64_t seed)
   EXPECT_TRUE(r.ok) << r.message;
 }
 
+/// expect_weighted_picks_in_group in each light group.
+void expect_weighted_picks(const RenderScene& rs, const Vec3f& p, uint64_t seed) {
+  for (int g = 0; g < RenderScene::k_light_groups; ++g)
+    if (!rs.group_lights[g].empty()) expect_weighted_picks_in_group(rs, g, p, seed + 1000 * uint64_t(g));
+}
+
 }  // namespace
 
-// A small lamp next to a sky: by power alone the lamp is (almost) never chosen; weighed by
+// A small lamp next to a sun: by power alone the lamp is (almost) never chosen; weighed by
 // its flux density at the shading point it is chosen near it and rarely far from it.
 TEST(light_selection, lights_are_weighed_by_their_flux_density_at_the_shading_point) {
   Scene s;
@@ -163,16 +191,18 @@ TEST(light_selection, lights_are_weighed_by_their_flux_density_at_the_shading_po
   ParamSet point;
   point.set("position", std::vector<double>{0.0, 0.5, 0.0});
   point.set("intensity", 2.0);
-  ParamSet env;
-  env.set("radiance", 0.05);
+  ParamSet sun;  // as much light as a sky of radiance 0.05 (E = 4 pi L over the sphere)
+  sun.set("direction", std::vector<double>{0.3, 1.0, 0.2});
+  sun.set("irradiance", 4.0 * k_pi_d * 0.05);
   uint32_t lamp = s.add_light("point", point);
-  uint32_t sky = s.add_light("environment", env);
+  uint32_t sky = s.add_light("sun", sun);
   s.commit();
   const RenderScene& rs = s.render_scene();
   ASSERT_TRUE(rs.light_weights[lamp].local);
   ASSERT_FALSE(rs.light_weights[sky].local);
+  ASSERT_EQ(rs.group_lights[0].size(), 2u);  // one group: neither is a dome
   // By power the lamp gets a vanishing share; at 0.5 m from it, most picks.
-  EXPECT_LT(rs.light_pick.pmf(lamp), 1e-3);
+  EXPECT_LT(rs.group_pmf(lamp), 1e-3);
   float near = rs.light_pmf(Vec3f(0.f, 0.f, 0.f), lamp), far = rs.light_pmf(Vec3f(30.f, 0.f, 0.f), lamp);
   EXPECT_GT(near, 0.5f);
   EXPECT_LT(far, 0.01f);

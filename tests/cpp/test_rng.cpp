@@ -154,3 +154,46 @@ TEST(rng, each_samples_2d_point_is_uniform_over_seeds) {
         EXPECT_TRUE(r.ok) << "spp " << spp << " sample " << sample << " dim " << dim << ": " << r.message;
       }
 }
+
+// Adaptive sampling's blocks: with `block` samples per round, each block of samples is a
+// padded Sobol set of its own (every half of every block stratified like a pixel with only
+// those samples), block 0 is the same as without blocks, and later blocks are other
+// randomizations (not the first block's points again).
+TEST(rng, blocks_are_stratified_on_their_own) {
+  const uint32_t spp = 96, block = 32, half_n = block / 2;
+  for (uint64_t pixel : {3ull, 4242ull})
+    for (uint32_t pair = 0; pair < 4; ++pair) {
+      std::vector<std::pair<float, float>> first;
+      for (uint32_t b = 0; b < spp / block; ++b) {
+        std::vector<std::pair<float, float>> pts[2];
+        for (uint32_t i = 0; i < block; ++i) {
+          const uint32_t s = b * block + i;
+          PixelSampler ps(11, pixel, s, spp, block);
+          EXPECT_EQ(ps.half(), s & 1u);
+          pts[s & 1u].push_back({ps.get(2 * pair), ps.get(2 * pair + 1)});
+          if (b == 0) {
+            PixelSampler plain(11, pixel, i, block);  // a pixel of `block` samples
+            EXPECT_EQ(ps.get(2 * pair), plain.get(2 * pair));
+            first.push_back(pts[s & 1u].back());
+          }
+        }
+        for (int h = 0; h < 2; ++h)
+          for (uint32_t bx = 1; bx <= half_n; bx *= 2) {
+            const uint32_t by = half_n / bx;
+            std::vector<int> cells(half_n, 0);
+            for (auto& p : pts[h])
+              ++cells[std::min(by - 1, uint32_t(p.second * by)) * bx + std::min(bx - 1, uint32_t(p.first * bx))];
+            EXPECT_TRUE(std::all_of(cells.begin(), cells.end(), [](int c) { return c == 1; }))
+                << "block " << b << " half " << h << " intervals " << bx << "x" << by;
+          }
+        if (b > 0) {
+          std::vector<std::pair<float, float>> all(pts[0]);
+          all.insert(all.end(), pts[1].begin(), pts[1].end());
+          std::sort(all.begin(), all.end());
+          std::vector<std::pair<float, float>> f(first);
+          std::sort(f.begin(), f.end());
+          EXPECT_NE(all, f) << "block " << b << " repeats block 0";
+        }
+      }
+    }
+}

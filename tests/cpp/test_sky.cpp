@@ -420,3 +420,43 @@ TEST(sky, parameter_errors) {
   m = message("azimuth", double(NAN));
   EXPECT_NE(m.find("'azimuth'"), std::string::npos) << m;
 }
+
+// The renderer samples a sky with a sun as two lights (Light::parts): its dome (a dome light,
+// sampled by the table) and its sun (not a dome): their radiances add up to the sky's, each
+// part's samples report their own pdf, and the powers add up to the sky's. Without a sun the
+// sky is its own one part.
+TEST(sky, parts_are_the_dome_and_the_sun) {
+  SkyParams s;
+  s.elevation = 35.0;
+  s.azimuth = 120.0;
+  auto sky = make_sky(s);
+  Bounds3 b;
+  b.expand(Vec3f(-3.f, 0.f, -3.f));
+  b.expand(Vec3f(3.f, 2.f, 3.f));
+  sky->preprocess(b);
+  std::vector<const Light*> parts = sky->parts();
+  ASSERT_EQ(parts.size(), 2u);
+  const Light* dome = parts[0];
+  const Light* sun = parts[1];
+  EXPECT_TRUE(dome->is_dome());
+  EXPECT_FALSE(sun->is_dome());
+  EXPECT_TRUE(dome->is_infinite() && sun->is_infinite());
+  EXPECT_NEAR(dome->power() + sun->power(), sky->power(), 1e-4 * sky->power());
+  Pcg32 rng(611);
+  for (int i = 0; i < 20000; ++i) {
+    Vec3f d = to_f(dnormalize({rng.next_float() - 0.5, rng.next_float() - 0.5, rng.next_float() - 0.5}));
+    if (i % 2) d = normalize(to_f(direction(35.0, 120.0)) + 0.003f * d);  // at and around the disc
+    Color sum = dome->le(d) + sun->le(d);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(sum[k], sky->le(d)[k], 1e-5f * std::max(1.f, sky->le(d)[k]));
+    for (const Light* part : parts) {
+      LightSample ls;
+      if (!part->sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) continue;
+      EXPECT_EQ(ls.pdf, part->pdf_le(ls.wi));
+      EXPECT_EQ(ls.li, part->le(ls.wi));
+    }
+  }
+  s.sun = false;
+  auto no_sun = make_sky(s);
+  ASSERT_EQ(no_sun->parts().size(), 1u);
+  EXPECT_EQ(no_sun->parts()[0], no_sun.get());
+}

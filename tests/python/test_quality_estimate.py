@@ -47,10 +47,10 @@ def _scene(name):
 
 SEEDS = (71, 72, 73, 74)  # not the references' (bench/quality_references.py REF_SEED)
 
-#: (scene, spp) where the estimate is known to miss, and why (docs/quality.md): the default
-#: frame's glass ball focuses the sun into a caustic on the ground that only BSDF sampling
-#: finds; at 64 spp the halves rarely see it and the estimate misses most of its error.
-KNOWN_MISSES = {("default", 64): "sun caustic of the glass ball: fireflies the halves rarely see"}
+#: (scene, spp) where the estimate is known to miss, and why (docs/quality.md). None since the
+#: scenarios clamp indirect light (clamp_indirect): before, the default frame's glass ball
+#: focused the sun into caustic fireflies that the halves rarely saw (+4.2 dB at 64 spp).
+KNOWN_MISSES = {}
 
 
 @pytest.mark.parametrize("spp", [4, 16, 64])
@@ -60,11 +60,13 @@ def test_the_estimate_is_within_1_5_db_of_the_true_psnr(name, spp, request):
     PSNR against the converged reference; each render's difference is printed."""
     if (name, spp) in KNOWN_MISSES:
         request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_MISSES[(name, spp)]))
+    from quality_references import render
+
     scene, depth, scale, _ = _scene(name)
     ref = _reference(name)
     est, true, rel_e, rel_t = [], [], [], []
     for seed in SEEDS:
-        res = scene.render(spp=spp, max_depth=depth, seed=seed)
+        res = render(name, scene, spp, depth, seed, scale)
         e = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), spp, scale)
         est.append(e["psnr_db"])
         rel_e.append(e["relmse"])

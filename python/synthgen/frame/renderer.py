@@ -21,6 +21,7 @@ from .. import post, randomize
 from ..outputs.render import camera_meta
 from ..scenario import Scenario, frame_rng, sample_frame
 from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
+from ..scenario.schema import RENDER_KEYS
 from ..scene import primitives as P
 from ..scene.vehicles import AXES, model_axes
 from .layout import FrameView, amodal_pixels, search_layout
@@ -230,8 +231,10 @@ class FrameRenderer:
             photo_info["dome"] = self._add_dome(fp, camera, keep, objects, render_seed)
         self.scene.set_camera(camera)
         self.scene.commit()
-        res = self.scene.render(spp=rs["spp"], max_depth=rs["max_depth"], rr_depth=rs["rr_depth"], seed=render_seed,
-                                threads=self.threads)
+        from ..post.quality import exposure_scale
+
+        res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure_scale(spec.post),
+                                **{k: rs[k] for k in RENDER_KEYS if k != "threads"})
         t_render = time.perf_counter()
 
         arrays = {"rgb": np.asarray(res.rgb), "depth": np.asarray(res.depth),
@@ -269,7 +272,7 @@ class FrameRenderer:
             "sampled": spec.sampled, "class_names": list(sc.class_names), "negative": spec.negative,
             # The render's estimated error against its converged image (from its half-sample
             # images; after the scene's exposure): synthgen.post.quality.
-            "noise": self._noise(res, rs["spp"], spec.post),
+            "noise": self._noise(res, spec.post),
             # What this frame shares with others, for the train/val split (outputs.split): its
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
@@ -310,12 +313,16 @@ class FrameRenderer:
         return arrays, meta, timings
 
     @staticmethod
-    def _noise(res: Any, spp: int, post_steps: Any) -> Optional[Dict[str, float]]:
+    def _noise(res: Any, post_steps: Any) -> Optional[Dict[str, float]]:
         from ..post.quality import estimate_noise, exposure_scale
 
-        est = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), int(spp), exposure_scale(post_steps))
-        return None if est is None else {"psnr_db": round(est["psnr_db"], 3), "relmse": float(f"{est['relmse']:.5g}"),
-                                         "spp": int(spp)}
+        count = np.asarray(res.sample_count)
+        est = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), count, exposure_scale(post_steps))
+        if est is None:
+            return None
+        # spp: the mean over the pixels (adaptive sampling gives each pixel its own count).
+        return {"psnr_db": round(est["psnr_db"], 3), "relmse": float(f"{est['relmse']:.5g}"),
+                "spp": round(float(count.mean()), 3)}
 
     # -- scene set-up of one frame --------------------------------------------------------
     def _set_lights(self, lights: List[PluginSpec]) -> None:

@@ -59,7 +59,8 @@ DEMO_SCENE: Dict[str, Any] = {
         {"name": "sun and sky", "type": "sky", "elevation": 35.0, "azimuth": 220.0, "turbidity": 2.5,
          "strength": 0.02},
     ],
-    "render": {"spp": 64, "max_depth": 8, "rr_depth": 5, "seed": 0},
+    # clamp_indirect: the caustics of the glass and gold spheres as fireflies (docs/failure_modes.md).
+    "render": {"spp": 64, "max_depth": 8, "rr_depth": 5, "seed": 0, "clamp_indirect": 3.0},
 }
 
 

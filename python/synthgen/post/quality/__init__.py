@@ -48,16 +48,20 @@ def relmse(img: np.ndarray, ref: np.ndarray, scale: float = 1.0, mask: Optional[
     return float(d[mask].mean() if mask is not None else d.mean())
 
 
-def estimate_noise(even: np.ndarray, odd: np.ndarray, spp: int, scale: float = 1.0,
+def estimate_noise(even: np.ndarray, odd: np.ndarray, spp: Any, scale: float = 1.0,
                    mask: Optional[np.ndarray] = None) -> Optional[Dict[str, float]]:
-    """The estimated error of a render of ``spp`` samples per pixel from its half-sample images
-    (``rgb_even``, ``rgb_odd``): ``{"psnr_db", "relmse", "mse"}`` against the converged image
-    (clamped after ``scale``, see :func:`psnr`; relMSE unclamped), or None below 2 spp."""
-    spp = int(spp)
-    if spp < 2:
+    """The estimated error of a render of ``spp`` samples per pixel (a number, or an H x W
+    array of each pixel's count: ``RenderResult.sample_count`` of adaptive sampling) from its
+    half-sample images (``rgb_even``, ``rgb_odd``): ``{"psnr_db", "relmse", "mse"}`` against the
+    converged image (clamped after ``scale``, see :func:`psnr`; relMSE unclamped), or None
+    where a pixel has fewer than 2 samples."""
+    n = np.asarray(spp, np.int64)
+    if n.ndim == 2:
+        n = n[..., None]
+    if (n < 2).any():
         return None
-    n_e, n_o = (spp + 1) // 2, spp // 2
-    factor = 1.0 / (spp * (1.0 / n_e + 1.0 / n_o))
+    n_e, n_o = (n + 1) // 2, n // 2
+    factor = 1.0 / (n * (1.0 / n_e + 1.0 / n_o))
     ua = np.asarray(even, np.float64)[..., :3] * scale
     ub = np.asarray(odd, np.float64)[..., :3] * scale
     a, b = np.clip(ua, 0.0, 1.0), np.clip(ub, 0.0, 1.0)
@@ -71,7 +75,7 @@ def estimate_noise(even: np.ndarray, odd: np.ndarray, spp: int, scale: float = 1
     one = (ua > 1.0) != (ub > 1.0)
     d = (a - b) ** 2 * np.where(one, 2.0 * factor, factor)
     mse = float((d[mask] if mask is not None else d).mean())
-    m = (ua * n_e + ub * n_o) / spp
+    m = (ua * n_e + ub * n_o) / n
     r = (ua - ub) ** 2 * factor / (m * m + RELMSE_EPS)
     rel = float((r[mask] if mask is not None else r).mean())
     return {"psnr_db": math.inf if mse <= 0.0 else -10.0 * math.log10(mse), "relmse": rel, "mse": mse}
