@@ -56,7 +56,7 @@ class Options:
     """The settings of one benchmark invocation (the command's options)."""
     scenes: Sequence[str] = ("cbox", "materials", "sunlit", "embree_cbox")
     out_dir: str = os.path.join("out", "bench")
-    budgets: Sequence[int] = (4, 16, 64, 256, 1024)
+    budgets: Sequence[int] = (1, 2, 4, 8, 16, 32, 64, 256, 1024)
     width: int = 256
     height: int = 192
     threads: int = 2
