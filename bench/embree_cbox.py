@@ -17,27 +17,12 @@ import numpy as np
 
 import synthgen as sg
 
-MODELS = "/usr/share/doc/embree3/models"
-
 
 def build_scene(light: str):
-    scene = sg.Scene()
-    imported = scene.load_mesh_file(f"{MODELS}/cornell_box.obj")
-    scene.add_instance(imported["mesh_id"])
-    if light == "point":
-        # -pointlight 213 300 227 100000 100000 100000
-        scene.add_light("point", {"position": [213.0, 300.0, 227.0], "intensity": [1e5, 1e5, 1e5]})
-    else:
-        # The box's own luminaire quad (y = 548, x 213..343, z 227..332) as an area light
-        # emitting downwards, with the same total power as the point light (4 pi I = pi L A).
-        area = 130.0 * 105.0
-        radiance = 4.0 * 1e5 / area
-        light_mat = scene.add_material("emissive", {"radiance": [radiance] * 3, "two_sided": True})
-        p = np.array([[213, 547.9, 227], [343, 547.9, 227], [343, 547.9, 332], [213, 547.9, 332]], np.float32)
-        mesh = scene.add_mesh(p, np.array([[0, 1, 2], [0, 2, 3]], np.uint32), name="luminaire")
-        scene.add_instance(mesh, material_id=light_mat)
-    world_from_camera = sg.PinholeCamera.look_at([278, 273, -800], [278, 273, 0], [0, 1, 0])
-    return scene, world_from_camera
+    """The scene and world_from_camera (shared with ``synthgen bench``: synthgen.bench.peers)."""
+    from synthgen.bench.peers import embree_cbox_scene
+
+    return embree_cbox_scene(light)
 
 
 def main(argv=None):

@@ -51,12 +51,13 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-# The scene descriptions (shared with the tests and bench/cycles_scene.py's input).
+# The scene descriptions (shared with the tests and cycles_scene.py's input) and the Cycles
+# runner live in the package (synthgen.bench, shared with `synthgen bench`).
 from vs_cycles_scenes import (CBOX_DIR, HDR_DIR, _sg, build_spec, spec_digest, synthgen_render,  # noqa: E402
                               synthgen_scene)  # noqa: F401  (tests/python/test_vs_cycles_reference.py)
+from synthgen.bench.peers import read_exr, run_cycles  # noqa: E402
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
-CYCLES_SCRIPT = os.path.join(REPO, "bench", "cycles_scene.py")
 TEST_REF_DIR = os.path.join(REPO, "tests", "python", "references", "cycles")
 ALL_SCENES = ("cbox", "materials", "sunlit")
 # Scenes whose light transport models are the same in both renderers (Lambertian surfaces,
@@ -114,51 +115,8 @@ def ensure_blender(need_hdr: bool = True) -> str:
     return blender
 
 
-def run_cycles(spec: dict, workdir: str, tag: str, blender: str = "blender") -> tuple:
-    path = os.path.join(workdir, f"{tag}.json")
-    with open(path, "w") as f:
-        json.dump(spec, f)
-    cmd = [blender, "-b", "--factory-startup", "--python-exit-code", "1", "-P", CYCLES_SCRIPT, "--", path]
-    t0 = time.perf_counter()
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    lines = [x for x in p.stdout.splitlines() if x.startswith("CYCLES_RESULT ")]
-    if p.returncode != 0 or not lines:
-        raise RuntimeError(f"Blender failed ({' '.join(cmd)}):\n{p.stdout[-4000:]}\n{p.stderr[-4000:]}")
-    t = json.loads(lines[-1].split(" ", 1)[1])
-    t["process_s"] = wall
-    img, meta = read_exr(spec["output"], with_meta=True)
-    # Cycles' own figures (EXR header): path tracing alone, and scene synchronisation.
-    for key, name in (("render_time", "pathtrace_s"), ("synchronization_time", "sync_s")):
-        v = meta.get(f"cycles.ViewLayer.{key}")
-        if v:
-            t[name] = _parse_blender_time(v)
-    return img, t
-
-
-def _parse_blender_time(s: str) -> float:
-    parts = [float(x) for x in s.split(":")]
-    v = 0.0
-    for x in parts:
-        v = v * 60.0 + x
-    return v
-
-
 # ---------------------------------------------------------------------------------------------
 # Images and figures
-
-
-def read_exr(path: str, with_meta: bool = False):
-    import OpenImageIO as oiio
-
-    buf = oiio.ImageBuf(path)
-    if buf.has_error:
-        raise OSError(f"{path}: {buf.geterror()}")
-    px = np.ascontiguousarray(buf.get_pixels(oiio.FLOAT)[:, :, :3], dtype=np.float32)
-    if not with_meta:
-        return px
-    meta = {a.name: a.value for a in buf.spec().extra_attribs}
-    return px, meta
 
 
 def write_exr_half(path: str, rgb: np.ndarray, attributes: dict | None = None) -> None:
