@@ -48,5 +48,6 @@ py::array wrap(std::shared_ptr<Film> owner, std::vector<T>& v, std::vector<py::s
 void bind_images(py::module_& m);         ///< read_image, read_image_info (images.cpp)
 void bind_camera(py::module_& m);         ///< PinholeCamera (camera_film.cpp)
 void bind_render_result(py::module_& m);  ///< RenderResult: the Film's buffers (camera_film.cpp)
+void bind_denoise(py::module_& m);        ///< denoise (denoise.cpp)
 
 }  // namespace sg::bindings

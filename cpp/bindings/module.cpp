@@ -213,6 +213,7 @@ PYBIND11_MODULE(_core, m) {
 
   bind_camera(m);
   bind_render_result(m);
+  bind_denoise(m);
 
   py::class_<Scene>(m, "Scene", R"doc(Integration API: typed libraries with stable integer ids.
 
