@@ -558,7 +558,6 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
       }
   }
 
-  PROF("X")
   // --- Cross-filtered regression: half A with weights from B (and B's features), and back.
   // NOTE: NFOR sec. 5.2: the weights of one half come from the other, so a half's filtered
   // value is not correlated with its own noise through its weights.
