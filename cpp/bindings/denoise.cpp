@@ -40,7 +40,7 @@ void bind_denoise(py::module_& m) {
       [](const py::object& rgb_even, const py::object& rgb_odd, const py::object& albedo_even,
          const py::object& albedo_odd, const py::object& normal_even, const py::object& normal_odd,
          const py::object& depth_even, const py::object& depth_odd, const py::object& variance, int radius,
-         int patch_radius, float k, int feature_radius, int selection_radius, float albedo_floor, float ridge) {
+         int patch_radius, float k, int feature_radius, int selection_radius, float albedo_floor, float ridge, float firefly_ratio) {
         FloatArray first = FloatArray::ensure(rgb_even);
         if (!first || first.ndim() != 3 || first.shape(2) != 3 || first.shape(0) == 0 || first.shape(1) == 0)
           throw Error("denoise: rgb_even must be a non-empty H x W x 3 float array");
@@ -73,6 +73,7 @@ void bind_denoise(py::module_& m) {
         s.selection_radius = selection_radius;
         s.albedo_floor = albedo_floor;
         s.ridge = ridge;
+        s.firefly_ratio = firefly_ratio;
         py::array_t<float> out({h, w, py::ssize_t(3)});
         float* dst = out.mutable_data();
         {
@@ -85,7 +86,7 @@ void bind_denoise(py::module_& m) {
       py::arg("normal_odd"), py::arg("depth_even"), py::arg("depth_odd"), py::arg("variance") = py::none(),
       py::arg("radius") = d.radius, py::arg("patch_radius") = d.patch_radius, py::arg("k") = d.k,
       py::arg("feature_radius") = d.feature_radius, py::arg("selection_radius") = d.selection_radius,
-      py::arg("albedo_floor") = d.albedo_floor, py::arg("ridge") = d.ridge,
+      py::arg("albedo_floor") = d.albedo_floor, py::arg("ridge") = d.ridge, py::arg("firefly_ratio") = d.firefly_ratio,
       "Denoises a render from its two half-sample images (H x W x 3 float32 each) and its features\n"
       "(albedo and normal H x W x 3, depth H x W; each as two halves -- the same array twice when the\n"
       "render has only pixel-centre features); returns H x W x 3 float32 linear radiance.\n"
@@ -94,7 +95,7 @@ void bind_denoise(py::module_& m) {
       "by their error estimated from the halves, albedo demodulation. Optional `variance`: the\n"
       "variance of the mean (RenderResult.variance); without it the halves' difference is used.\n"
       "Settings: radius (window half-size), patch_radius, k, feature_radius (feature prefilter),\n"
-      "selection_radius, albedo_floor (0: no demodulation), ridge. Deterministic for any number of\n"
+      "selection_radius, albedo_floor (0: no demodulation), ridge, firefly_ratio (0: off). Deterministic for any number of\n"
       "threads. Raises SynthgenError on bad shapes or settings. Use synthgen.post.denoise.denoise.");
 }
 

@@ -409,6 +409,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   if (!(st.k > 0.f) || !std::isfinite(st.k)) throw Error("denoise: k must be positive");
   if (!(st.albedo_floor >= 0.f) || !std::isfinite(st.albedo_floor)) throw Error("denoise: albedo_floor must be >= 0");
   if (!(st.ridge >= 0.f) || !std::isfinite(st.ridge)) throw Error("denoise: ridge must be >= 0");
+  if (!(st.firefly_ratio >= 0.f) || !std::isfinite(st.firefly_ratio)) throw Error("denoise: firefly_ratio must be >= 0");
 
   const int W = int(in.width), H = int(in.height);
   const size_t n = size_t(W) * size_t(H);
@@ -452,7 +453,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
       in.albedo[0] != in.albedo[1] || in.normal[0] != in.normal[1] || in.depth[0] != in.depth[1];
   if (split_features && st.feature_radius > 0) {
     // NOTE: NFOR sec. 5.1 (feature prefiltering): each half's features are NL-means filtered
-    // with weights from the other half (patches 7 x 7, window 11 x 11 by default, k 0.5), the
+    // with weights from the other half (patches 7 x 7, window (2 feature_radius + 1)^2, k 0.5), the
     // variance being that of a half, estimated as (A - B)^2 / 2 (3 x 3 mean).
     Planes diff, var;
     diff.allocate(k_feature_channels, W, H, pad);
@@ -504,6 +505,79 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         }
     }
     rad[h].fill_border();
+  }
+
+  // --- Outliers (fireflies): each half is clamped against the other half's neighbourhood.
+  // NOTE: not in NFOR, whose cross filtering spreads a firefly of one half over the window
+  // (and the first-order fit may amplify it). A value of half A above
+  // firefly_ratio * max(3 x 3 of B) + the image mean of B is clamped there; what was cut
+  // (in radiance) is kept and added back spread over a (2 * radius + 1)^2 box, so the energy
+  // -- the image mean -- is kept (up to the cap in the final blend; an energy-preserving take
+  // on outlier rejection, cf.
+  // Zirr, Hanika & Dachsbacher 2018, "Re-weighting firefly samples", which spreads rather
+  // than discards the outliers' energy). Signal that both halves see is not clamped.
+  Planes residual;
+  residual.allocate(3, W, H, pad);
+  if (st.firefly_ratio > 0.f) {
+    Planes clamped[2];
+    for (int h = 0; h < 2; ++h) {
+      clamped[h] = rad[h];
+      for (int c = 0; c < 3; ++c) {
+        const float* o = rad[1 - h].plane(c);
+        double sum = 0.0;
+        for (int y = 0; y < H; ++y)
+          for (int x = 0; x < W; ++x) sum += double(o[rad[h].index(x, y)]);
+        const float floor_c = float(sum / double(n));
+        const float* a = rad[h].plane(c);
+        const float* dv = divisor.plane(c);
+        float* dst = clamped[h].plane(c);
+        float* res = residual.plane(c);
+        const ptrdiff_t stv = rad[h].stride;
+        for (int y = 0; y < H; ++y)
+          for (int x = 0; x < W; ++x) {
+            const size_t p = rad[h].index(x, y);
+            float m = o[p];
+            for (int j = -1; j <= 1; ++j)
+              for (int i = -1; i <= 1; ++i) m = std::max(m, o[ptrdiff_t(p) + j * stv + i]);
+            const float limit = st.firefly_ratio * m + floor_c;
+            if (a[p] > limit) {
+              res[p] += 0.5f * (a[p] - limit) * dv[p];
+              dst[p] = limit;
+            }
+          }
+      }
+      clamped[h].fill_border();
+    }
+    rad[0] = std::move(clamped[0]);
+    rad[1] = std::move(clamped[1]);
+    // Spread: separable box of radius `radius` (border replicated).
+    residual.fill_border();
+    Planes tmp;
+    tmp.allocate(3, W, H, pad);
+    const int r = std::min(st.radius, pad);
+    const float norm = 1.f / float((2 * r + 1) * (2 * r + 1));
+    for (int c = 0; c < 3; ++c) {
+      const float* src = residual.plane(c);
+      float* t = tmp.plane(c);
+      for (int y = -pad; y < H + pad; ++y)
+        for (int x = 0; x < W; ++x) {
+          float s = 0.f;
+          const size_t p = residual.index(x, y);
+          for (int i = -r; i <= r; ++i) s += src[ptrdiff_t(p) + i];
+          t[p] = s;
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const float* t = tmp.plane(c);
+      float* dst = residual.plane(c);
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          float s = 0.f;
+          const size_t p = residual.index(x, y);
+          for (int j = -r; j <= r; ++j) s += t[ptrdiff_t(p) + ptrdiff_t(j) * residual.stride];
+          dst[p] = s * norm;
+        }
+    }
   }
 
   // --- Variance of one half (demodulated).
@@ -625,7 +699,12 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         const float s = select_f.plane(c)[p];
         const float a = cand[0][0].plane(c)[p] + s * (cand[0][1].plane(c)[p] - cand[0][0].plane(c)[p]);
         const float b = cand[1][0].plane(c)[p] + s * (cand[1][1].plane(c)[p] - cand[1][0].plane(c)[p]);
-        float v = 0.5f * (a + b) * divisor.plane(c)[p];
+        const float filtered = std::max(0.5f * (a + b) * divisor.plane(c)[p], 0.f);
+        // NOTE: the spread outliers add at most the pixel's own filtered value: the excess of
+        // an outlier too strong to spread without making new ones (a caustic path found by one
+        // sample in thousands) is dropped -- biased, like all outlier rejection, but only for
+        // values far beyond what the other half sees.
+        float v = filtered + std::min(residual.plane(c)[p], filtered);
         if (!std::isfinite(v)) v = 0.5f * (rad[0].plane(c)[p] + rad[1].plane(c)[p]) * divisor.plane(c)[p];
         out_rgb[3 * i + c] = std::isfinite(v) ? std::max(v, 0.f) : 0.f;
       }

@@ -25,9 +25,10 @@ struct DenoiseInput {
 /// Settings of denoise(); the defaults are the ones measured in docs/denoise.md.
 struct DenoiseSettings {
   /// Half-size of the regression window ((2r+1)^2 neighbours; NFOR: 9).
-  int radius = 7;
-  /// Half-size of the NL-means patches of the regression weights (NFOR: 3).
-  int patch_radius = 3;
+  int radius = 5;
+  /// Half-size of the NL-means patches of the regression weights (NFOR: 3; 1 measured better
+  /// here, docs/denoise.md).
+  int patch_radius = 1;
   /// NL-means bandwidth of the larger of the two candidate filters; the other uses k / 2
   /// (NFOR's candidates are 1 and 0.5). Each pixel blends the two by their estimated error.
   float k = 1.0f;
@@ -36,13 +37,17 @@ struct DenoiseSettings {
   int feature_radius = 5;
   /// Window half-size of the NL-means filter of the error estimates and of the selection map
   /// (patches 1, k 1; NFOR: 9).
-  int selection_radius = 5;
+  int selection_radius = 2;
   /// Divide radiance by max(albedo, albedo_floor) before filtering and multiply after, so
   /// textures stay sharp; 0 disables the demodulation.
   float albedo_floor = 0.01f;
   /// Ridge added to the regression's normal equations (times the sum of weights) for the
   /// feature slopes: keeps windows where a feature is constant solvable.
   float ridge = 1e-3f;
+  /// Outliers: a half's value above firefly_ratio x the other half's 3 x 3 maximum (+ its
+  /// image mean) is clamped before filtering and the excess added back spread over the
+  /// window (the image's mean is kept); 0 disables.
+  float firefly_ratio = 2.f;
 };
 
 /// Denoises a render from its two half-sample images and features into `out_rgb` (H x W x 3).

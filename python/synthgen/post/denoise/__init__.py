@@ -19,13 +19,14 @@ __all__ = ["denoise", "SETTINGS"]
 
 #: The settings denoise() accepts, with their defaults (cpp/film/denoise.h DenoiseSettings).
 SETTINGS = {
-    "radius": 7,
-    "patch_radius": 3,
+    "radius": 5,
+    "patch_radius": 1,
     "k": 1.0,
     "feature_radius": 5,
-    "selection_radius": 5,
+    "selection_radius": 2,
     "albedo_floor": 0.01,
     "ridge": 1e-3,
+    "firefly_ratio": 2.0,
 }
 
 Feature = Union[np.ndarray, Sequence[np.ndarray]]
@@ -57,7 +58,7 @@ def denoise(rgb_even: np.ndarray, rgb_odd: np.ndarray, albedo: Feature, normal: 
     (even, odd). ``variance`` (optional, H x W x 3): the variance of the mean
     (``RenderResult.variance``); without it the noise is estimated from the halves.
     ``settings``: see :data:`SETTINGS` (radius, patch_radius, k, feature_radius,
-    selection_radius, albedo_floor, ridge). Raises ValueError on bad shapes or settings."""
+    selection_radius, albedo_floor, ridge, firefly_ratio). Raises ValueError on bad shapes or settings."""
     unknown = sorted(set(settings) - set(SETTINGS))
     if unknown:
         raise ValueError(f"denoise: unknown setting(s) {unknown}; known: {sorted(SETTINGS)}")
