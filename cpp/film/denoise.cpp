@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@ namespace {
 
 /// 8 floats in one SIMD register (GCC / Clang vector extension).
 typedef float V8 __attribute__((vector_size(32)));
+typedef float V16 __attribute__((vector_size(64)));
 
 constexpr int k_tile_w = 32;
 constexpr int k_tile_h = 16;
@@ -51,19 +53,25 @@ struct TileRect {
 struct Planes {
   int channels = 0, width = 0, height = 0, pad = 0, stride = 0;
   size_t plane_size = 0;
-  std::vector<float> data;
+  /// Not value-initialised: every user writes what it reads (allocate(..., true) zeroes).
+  std::unique_ptr<float[]> data;
 
-  void allocate(int c, int w, int h, int p) {
+  void allocate(int c, int w, int h, int p, bool zero = false) {
     channels = c;
     width = w;
     height = h;
     pad = p;
     stride = w + 2 * p;
     plane_size = size_t(stride) * size_t(h + 2 * p);
-    data.assign(size_t(c) * plane_size, 0.f);
+    data.reset(new float[size_t(c) * plane_size]);
+    if (zero) std::fill(data.get(), data.get() + size_t(c) * plane_size, 0.f);
   }
-  float* plane(int c) { return data.data() + size_t(c) * plane_size; }
-  const float* plane(int c) const { return data.data() + size_t(c) * plane_size; }
+  float* plane(int c) { return data.get() + size_t(c) * plane_size; }
+  const float* plane(int c) const { return data.get() + size_t(c) * plane_size; }
+  void copy_from(const Planes& o) {
+    allocate(o.channels, o.width, o.height, o.pad);
+    std::copy(o.data.get(), o.data.get() + size_t(channels) * plane_size, data.get());
+  }
   /// Index into a plane of pixel (x, y); x, y may lie in the padding.
   size_t index(int x, int y) const { return size_t(y + pad) * size_t(stride) + size_t(x + pad); }
 
@@ -267,30 +275,29 @@ void box3(const Planes& in, Planes& out) {
 /// Solves (m + ridge) beta = r (three right-hand sides) by Cholesky in double and returns the
 /// constant term (the last unknown) of each; false when the system is not positive definite.
 bool solve_constant(const float (&m)[k_dims][k_dims], const float (&r)[3][k_dims], float ridge, float out[3]) {
-  double L[k_dims][k_dims];
+  double L[k_dims][k_dims], inv_diag[k_dims];
   const double lambda = double(ridge) * double(m[k_dims - 1][k_dims - 1]);
+  const double tiny = 1e-12 * double(m[k_dims - 1][k_dims - 1]);
   for (int i = 0; i < k_dims; ++i) {
-    for (int j = 0; j <= i; ++j) {
+    for (int j = 0; j < i; ++j) {
       double s = double(m[i][j]);
-      if (i == j && i < k_dims - 1) s += lambda;
       for (int l = 0; l < j; ++l) s -= L[i][l] * L[j][l];
-      if (i == j) {
-        if (!(s > 1e-12 * double(m[k_dims - 1][k_dims - 1]))) return false;
-        L[i][i] = std::sqrt(s);
-      } else {
-        L[i][j] = s / L[j][j];
-      }
+      L[i][j] = s * inv_diag[j];
     }
+    double s = double(m[i][i]) + (i < k_dims - 1 ? lambda : 0.0);
+    for (int l = 0; l < i; ++l) s -= L[i][l] * L[i][l];
+    if (!(s > tiny)) return false;
+    inv_diag[i] = 1.0 / std::sqrt(s);
   }
   for (int c = 0; c < 3; ++c) {
     double z[k_dims];
     for (int i = 0; i < k_dims; ++i) {
       double s = double(r[c][i]);
       for (int l = 0; l < i; ++l) s -= L[i][l] * z[l];
-      z[i] = s / L[i][i];
+      z[i] = s * inv_diag[i];
     }
     // NOTE: with the constant as the last unknown, L^T beta = z gives it directly.
-    out[c] = float(z[k_dims - 1] / L[k_dims - 1][k_dims - 1]);
+    out[c] = float(z[k_dims - 1] * inv_diag[k_dims - 1]);
     if (!std::isfinite(out[c])) return false;
   }
   return true;
@@ -304,7 +311,7 @@ bool solve_constant(const float (&m)[k_dims][k_dims], const float (&r)[3][k_dims
 /// sum_q w_pq (y_q - beta^T x_q)^2 over the window, with x_q = the features of q minus those
 /// of p (and 1): the estimate at p is beta's constant term. Unlike Tungsten's collaborative
 /// variant only the centre is reconstructed (one solve per pixel, no gather of windows).
-void regress(const std::vector<float>& Y, const std::vector<float>& X, const Planes& g, const Planes& v,
+void regress(const float* Y, const float* X, const Planes& g, const Planes& v,
              const DenoiseSettings& st, Planes* out_k) {
   const int W = g.width, H = g.height, R = st.radius, F = st.patch_radius;
   const int side = 2 * R + 1, n_off = side * side;
@@ -351,9 +358,11 @@ void regress(const std::vector<float>& Y, const std::vector<float>& X, const Pla
         V8 xc;
         std::memcpy(&xc, &X[p * k_dims], sizeof xc);
         xc[k_dims - 1] = 0.f;  // the constant column stays 1
-        V8 m1[k_dims], m2[k_dims], r1[3], r2[3];
-        for (int a = 0; a < k_dims; ++a) m1[a] = m2[a] = V8{};
-        for (int c = 0; c < 3; ++c) r1[c] = r2[c] = V8{};
+        // Both candidates at once: lanes 0-7 accumulate with weight w (bandwidth k), lanes
+        // 8-15 with w^4 (k / 2).
+        V16 m[k_dims], r[3];
+        for (int a = 0; a < k_dims; ++a) m[a] = V16{};
+        for (int c = 0; c < 3; ++c) r[c] = V16{};
         float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
                        std::numeric_limits<float>::max()};
         float hi[3] = {-lo[0], -lo[0], -lo[0]};
@@ -367,20 +376,25 @@ void regress(const std::vector<float>& Y, const std::vector<float>& X, const Pla
           V8 d;
           std::memcpy(&d, &X[q * k_dims], sizeof d);
           d -= xc;
-          // Full (symmetric) normal matrices, one 8-wide row per unknown.
-          for (int a = 0; a < k_dims; ++a) {
-            m1[a] += (w1 * d[a]) * d;
-            m2[a] += (w2 * d[a]) * d;
-          }
-          for (int c = 0; c < 3; ++c) {
-            r1[c] += (w1 * yq[c]) * d;
-            r2[c] += (w2 * yq[c]) * d;
-          }
+          const V8 wd1 = w1 * d, wd2 = w2 * d;
+          const V16 wd = __builtin_shufflevector(wd1, wd2, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+          // Full (symmetric) normal matrices, one 16-wide row (both candidates) per unknown.
+          for (int a = 0; a < k_dims; ++a) m[a] += d[a] * wd;
+          for (int c = 0; c < 3; ++c) r[c] += yq[c] * wd;
           if (w1 >= k_range_weight)
             for (int c = 0; c < 3; ++c) {
               lo[c] = std::min(lo[c], yq[c]);
               hi[c] = std::max(hi[c], yq[c]);
             }
+        }
+        V8 m1[k_dims], m2[k_dims], r1[3], r2[3];
+        for (int a = 0; a < k_dims; ++a) {
+          m1[a] = __builtin_shufflevector(m[a], m[a], 0, 1, 2, 3, 4, 5, 6, 7);
+          m2[a] = __builtin_shufflevector(m[a], m[a], 8, 9, 10, 11, 12, 13, 14, 15);
+        }
+        for (int c = 0; c < 3; ++c) {
+          r1[c] = __builtin_shufflevector(r[c], r[c], 0, 1, 2, 3, 4, 5, 6, 7);
+          r2[c] = __builtin_shufflevector(r[c], r[c], 8, 9, 10, 11, 12, 13, 14, 15);
         }
         finish(m1, r1, lo, hi, out_k[0], t.x0 + x, t.y0 + y);
         finish(m2, r2, lo, hi, out_k[1], t.x0 + x, t.y0 + y);
@@ -517,11 +531,11 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   // Zirr, Hanika & Dachsbacher 2018, "Re-weighting firefly samples", which spreads rather
   // than discards the outliers' energy). Signal that both halves see is not clamped.
   Planes residual;
-  residual.allocate(3, W, H, pad);
+  residual.allocate(3, W, H, pad, true);
   if (st.firefly_ratio > 0.f) {
     Planes clamped[2];
     for (int h = 0; h < 2; ++h) {
-      clamped[h] = rad[h];
+      clamped[h].copy_from(rad[h]);
       for (int c = 0; c < 3; ++c) {
         const float* o = rad[1 - h].plane(c);
         double sum = 0.0;
@@ -610,12 +624,12 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   var.fill_border();
 
   // --- Regression features, 8 per padded pixel: x / R, y / R, depth, normal, mean albedo, 1.
-  std::vector<float> X[2], Y[2];
+  std::unique_ptr<float[]> X[2], Y[2];
   const size_t padded = feat[0].plane_size;
   const float inv_r = 1.f / float(st.radius);
   for (int h = 0; h < 2; ++h) {
-    X[h].assign(padded * k_dims, 0.f);
-    Y[h].assign(padded * 4, 0.f);
+    X[h].reset(new float[padded * k_dims]);
+    Y[h].reset(new float[padded * 4]);
     for (int y = -pad; y < H + pad; ++y)
       for (int x = -pad; x < W + pad; ++x) {
         const size_t p = feat[h].index(x, y);
@@ -638,10 +652,10 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   Planes cand[2][2];  // [half][bandwidth k, k / 2]
   for (int h = 0; h < 2; ++h) {
     for (int b = 0; b < 2; ++b) cand[h][b].allocate(3, W, H, pad);
-    regress(Y[h], X[1 - h], rad[1 - h], var, st, cand[h]);
+    regress(Y[h].get(), X[1 - h].get(), rad[1 - h], var, st, cand[h]);
   }
-  for (auto& v : X) std::vector<float>().swap(v);
-  for (auto& v : Y) std::vector<float>().swap(v);
+  for (auto& v : X) v.reset();
+  for (auto& v : Y) v.reset();
 
   // --- Error of each candidate, from the halves.
   // NOTE: NFOR sec. 5.3: with B independent of the filtered A, E[(A_f - B)^2] = MSE(A_f) +
