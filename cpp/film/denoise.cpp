@@ -403,6 +403,15 @@ void regress(const float* Y, const float* X, const Planes& g, const Planes& v,
   });
 }
 
+/// fn(y) for every row y in [y0, y1), rows in parallel (each row's result independent of the
+/// others: no reduction across rows).
+template <class Fn>
+void for_rows(int y0, int y1, Fn&& fn) {
+  tbb::parallel_for(tbb::blocked_range<int>(y0, y1, 8), [&](const tbb::blocked_range<int>& r) {
+    for (int y = r.begin(); y != r.end(); ++y) fn(y);
+  });
+}
+
 inline float finite_or(float v, float fallback) { return std::isfinite(v) ? v : fallback; }
 
 }  // namespace
@@ -450,7 +459,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   Planes feat[2];
   for (int h = 0; h < 2; ++h) {
     feat[h].allocate(k_feature_channels, W, H, pad);
-    for (int y = 0; y < H; ++y) {
+    for_rows(0, H, [&](int y) {
       for (int x = 0; x < W; ++x) {
         const size_t i = size_t(y) * W + x, p = feat[h].index(x, y);
         for (int c = 0; c < 3; ++c) {
@@ -460,7 +469,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         const float d = in.depth[h][i];
         feat[h].plane(6)[p] = (std::isfinite(d) && d > 0.f) ? d / (d + depth_scale) : 1.f;
       }
-    }
+    });
     feat[h].fill_border();
   }
   const bool split_features =
@@ -511,12 +520,13 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
     for (int c = 0; c < 3; ++c) {
       float* o = rad[h].plane(c);
       const float* dv = divisor.plane(c);
-      for (int y = 0; y < H; ++y)
+      for_rows(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) {
           const size_t i = size_t(y) * W + x, p = rad[h].index(x, y);
           const float v = std::min(std::max(finite_or(in.rgb[h][3 * i + c], 0.f), -k_max_radiance), k_max_radiance);
           o[p] = v / dv[p];
         }
+      });
     }
     rad[h].fill_border();
   }
@@ -547,7 +557,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         float* dst = clamped[h].plane(c);
         float* res = residual.plane(c);
         const ptrdiff_t stv = rad[h].stride;
-        for (int y = 0; y < H; ++y)
+        for_rows(0, H, [&](int y) {
           for (int x = 0; x < W; ++x) {
             const size_t p = rad[h].index(x, y);
             float m = o[p];
@@ -559,6 +569,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
               dst[p] = limit;
             }
           }
+        });
       }
       clamped[h].fill_border();
     }
@@ -573,24 +584,26 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
     for (int c = 0; c < 3; ++c) {
       const float* src = residual.plane(c);
       float* t = tmp.plane(c);
-      for (int y = -pad; y < H + pad; ++y)
+      for_rows(-pad, H + pad, [&](int y) {
         for (int x = 0; x < W; ++x) {
           float s = 0.f;
           const size_t p = residual.index(x, y);
           for (int i = -r; i <= r; ++i) s += src[ptrdiff_t(p) + i];
           t[p] = s;
         }
+      });
     }
     for (int c = 0; c < 3; ++c) {
       const float* t = tmp.plane(c);
       float* dst = residual.plane(c);
-      for (int y = 0; y < H; ++y)
+      for_rows(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) {
           float s = 0.f;
           const size_t p = residual.index(x, y);
           for (int j = -r; j <= r; ++j) s += t[ptrdiff_t(p) + ptrdiff_t(j) * residual.stride];
           dst[p] = s * norm;
         }
+      });
     }
   }
 
@@ -600,13 +613,14 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   if (in.variance) {
     for (int c = 0; c < 3; ++c) {
       const float* dv = divisor.plane(c);
-      for (int y = 0; y < H; ++y)
+      for_rows(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) {
           const size_t i = size_t(y) * W + x, p = var.index(x, y);
           const float v = std::max(finite_or(in.variance[3 * i + c], 0.f), 0.f);
           // A half has half the samples: twice the variance of the mean.
           var.plane(c)[p] = 2.f * v / (dv[p] * dv[p]);
         }
+      });
     }
   } else {
     // NOTE: the dual-buffer estimate (Rousselle et al. 2012): E[(A - B)^2] = 2 Var(half),
@@ -630,7 +644,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   for (int h = 0; h < 2; ++h) {
     X[h].reset(new float[padded * k_dims]);
     Y[h].reset(new float[padded * 4]);
-    for (int y = -pad; y < H + pad; ++y)
+    for_rows(-pad, H + pad, [&](int y) {
       for (int x = -pad; x < W + pad; ++x) {
         const size_t p = feat[h].index(x, y);
         float* f = &X[h][p * k_dims];
@@ -644,6 +658,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         f[7] = 1.f;
         for (int c = 0; c < 3; ++c) Y[h][p * 4 + c] = rad[h].plane(c)[p];
       }
+    });
   }
 
   // --- Cross-filtered regression: half A with weights from B (and B's features), and back.
@@ -654,8 +669,10 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
     for (int b = 0; b < 2; ++b) cand[h][b].allocate(3, W, H, pad);
     regress(Y[h].get(), X[1 - h].get(), rad[1 - h], var, st, cand[h]);
   }
-  for (auto& v : X) v.reset();
-  for (auto& v : Y) v.reset();
+  if (!st.second_pass) {
+    for (auto& v : X) v.reset();
+    for (auto& v : Y) v.reset();
+  }
 
   // --- Error of each candidate, from the halves.
   // NOTE: NFOR sec. 5.3: with B independent of the filtered A, E[(A_f - B)^2] = MSE(A_f) +
@@ -678,7 +695,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
       const float* fa = cand[0][bw].plane(c);
       const float* fb = cand[1][bw].plane(c);
       float* o = mse.plane(3 * bw + c);
-      for (int y = 0; y < H; ++y)
+      for_rows(0, H, [&](int y) {
         for (int x = 0; x < W; ++x) {
           const size_t p = mse.index(x, y);
           const float ea = (fa[p] - b[p]) * (fa[p] - b[p]) - v[p];
@@ -686,6 +703,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
           const float dab = fa[p] - fb[p];
           o[p] = 0.5f * (ea + eb) - 0.25f * dab * dab;
         }
+      });
     }
   }
   mse.fill_border();
@@ -696,24 +714,59 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   nlmeans(mse, mean_rad, mean_var, 1, st.selection_radius, 1.f, mse_f);
   select.allocate(3, W, H, pad);
   for (int c = 0; c < 3; ++c)
-    for (int y = 0; y < H; ++y)
+    for_rows(0, H, [&](int y) {
       for (int x = 0; x < W; ++x) {
         const size_t p = select.index(x, y);
         select.plane(c)[p] = mse_f.plane(3 + c)[p] < mse_f.plane(c)[p] ? 1.f : 0.f;
       }
+    });
   select.fill_border();
   select_f.allocate(3, W, H, pad);
   nlmeans(select, mean_rad, mean_var, 1, st.selection_radius, 1.f, select_f);
 
-  // --- Blend, average the halves, remodulate.
-  for (int y = 0; y < H; ++y)
-    for (int x = 0; x < W; ++x) {
-      const size_t i = size_t(y) * W + x, p = select_f.index(x, y);
-      for (int c = 0; c < 3; ++c) {
+  // --- Blend the candidates, average the halves.
+  Planes blended, blend_var;
+  blended.allocate(3, W, H, pad);
+  blend_var.allocate(3, W, H, pad);
+  for (int c = 0; c < 3; ++c)
+    for_rows(0, H, [&](int y) {
+      for (int x = 0; x < W; ++x) {
+        const size_t p = select_f.index(x, y);
         const float s = select_f.plane(c)[p];
         const float a = cand[0][0].plane(c)[p] + s * (cand[0][1].plane(c)[p] - cand[0][0].plane(c)[p]);
         const float b = cand[1][0].plane(c)[p] + s * (cand[1][1].plane(c)[p] - cand[1][0].plane(c)[p]);
-        const float filtered = std::max(0.5f * (a + b) * divisor.plane(c)[p], 0.f);
+        blended.plane(c)[p] = 0.5f * (a + b);
+        blend_var.plane(c)[p] = 0.25f * (a - b) * (a - b);
+      }
+    });
+  if (st.second_pass) {
+    // NOTE: NFOR sec. 5.4 (second pass): the averaged result is filtered once more by the
+    // same regression, guided by itself, its variance estimated as (A_f - B_f)^2 / 4 (3 x 3
+    // mean here), on the features of the even half.
+    blended.fill_border();
+    Planes smooth_var;
+    smooth_var.allocate(3, W, H, pad);
+    blend_var.fill_border();
+    box3(blend_var, smooth_var);
+    smooth_var.fill_border();
+    for_rows(-pad, H + pad, [&](int y) {
+      for (int x = -pad; x < W + pad; ++x) {
+        const size_t p = blended.index(x, y);
+        for (int c = 0; c < 3; ++c) Y[0][p * 4 + c] = blended.plane(c)[p];
+      }
+    });
+    Planes second[2];
+    for (auto& b : second) b.allocate(3, W, H, pad);
+    regress(Y[0].get(), X[0].get(), blended, smooth_var, st, second);
+    blended = std::move(second[0]);
+  }
+
+  // --- Remodulate, add the outliers back.
+  for_rows(0, H, [&](int y) {
+    for (int x = 0; x < W; ++x) {
+      const size_t i = size_t(y) * W + x, p = blended.index(x, y);
+      for (int c = 0; c < 3; ++c) {
+        const float filtered = std::max(blended.plane(c)[p] * divisor.plane(c)[p], 0.f);
         // NOTE: the spread outliers add at most the pixel's own filtered value: the excess of
         // an outlier too strong to spread without making new ones (a caustic path found by one
         // sample in thousands) is dropped -- biased, like all outlier rejection, but only for
@@ -723,6 +776,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         out_rgb[3 * i + c] = std::isfinite(v) ? std::max(v, 0.f) : 0.f;
       }
     }
+  });
 }
 
 }  // namespace sg

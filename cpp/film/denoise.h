@@ -48,6 +48,8 @@ struct DenoiseSettings {
   /// image mean) is clamped before filtering and the excess added back spread over the
   /// window (the image's mean is kept); 0 disables.
   float firefly_ratio = 2.f;
+  /// NFOR's second pass: the averaged result filtered once more (about 1.5 x the cost).
+  bool second_pass = false;
 };
 
 /// Denoises a render from its two half-sample images and features into `out_rgb` (H x W x 3).
