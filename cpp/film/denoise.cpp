@@ -272,35 +272,62 @@ void box3(const Planes& in, Planes& out) {
   }
 }
 
-/// Solves (m + ridge) beta = r (three right-hand sides) by Cholesky in double and returns the
-/// constant term (the last unknown) of each; false when the system is not positive definite.
-bool solve_constant(const float (&m)[k_dims][k_dims], const float (&r)[3][k_dims], float ridge, float out[3]) {
-  double L[k_dims][k_dims], inv_diag[k_dims];
-  const double lambda = double(ridge) * double(m[k_dims - 1][k_dims - 1]);
-  const double tiny = 1e-12 * double(m[k_dims - 1][k_dims - 1]);
+/// Normal equations of up to k_batch regressions (two candidates of one tile row), one lane
+/// per system (structure of arrays, so that the solve vectorises across systems).
+constexpr int k_batch = 2 * k_tile_w;
+struct Systems {
+  alignas(64) float m[k_dims][k_dims][k_batch];
+  alignas(64) float r[3][k_dims][k_batch];
+  alignas(64) float out[3][k_batch];
+};
+
+/// Solves (m + ridge) beta = r (three right-hand sides) of the first `count` systems by
+/// Cholesky and writes beta's constant term (the last unknown) to out; a system that is not
+/// positive definite gets the weighted mean (the zeroth-order estimate) instead.
+/// NOTE: float: the ridge (times the sum of weights, on features scaled to about [-1, 1])
+/// bounds the condition number near 1e3, so float keeps about 4 digits; the same
+/// operations in every lane whatever the batch, so the result does not depend on threads.
+void solve_batch(Systems& s, int count, float ridge) {
+  alignas(64) float L[k_dims][k_dims][k_batch];
+  alignas(64) float inv[k_dims][k_batch];
+  alignas(64) float ok[k_batch];
+  alignas(64) float acc[k_batch];
+  const int n = count;
+  for (int l = 0; l < n; ++l) ok[l] = 1.f;
   for (int i = 0; i < k_dims; ++i) {
-    for (int j = 0; j < i; ++j) {
-      double s = double(m[i][j]);
-      for (int l = 0; l < j; ++l) s -= L[i][l] * L[j][l];
-      L[i][j] = s * inv_diag[j];
+    for (int j = 0; j <= i; ++j) {
+      for (int l = 0; l < n; ++l) acc[l] = s.m[i][j][l];
+      for (int k = 0; k < j; ++k)
+        for (int l = 0; l < n; ++l) acc[l] -= L[i][k][l] * L[j][k][l];
+      if (j < i) {
+        for (int l = 0; l < n; ++l) L[i][j][l] = acc[l] * inv[j][l];
+      } else {
+        const float lambda = i < k_dims - 1 ? ridge : 0.f;
+        for (int l = 0; l < n; ++l) {
+          const float total = s.m[k_dims - 1][k_dims - 1][l];
+          const float d = acc[l] + lambda * total;
+          const bool good = d > 1e-6f * total;
+          ok[l] = good ? ok[l] : 0.f;
+          inv[i][l] = 1.f / std::sqrt(good ? d : 1.f);
+        }
+      }
     }
-    double s = double(m[i][i]) + (i < k_dims - 1 ? lambda : 0.0);
-    for (int l = 0; l < i; ++l) s -= L[i][l] * L[i][l];
-    if (!(s > tiny)) return false;
-    inv_diag[i] = 1.0 / std::sqrt(s);
   }
   for (int c = 0; c < 3; ++c) {
-    double z[k_dims];
+    alignas(64) float z[k_dims][k_batch];
     for (int i = 0; i < k_dims; ++i) {
-      double s = double(r[c][i]);
-      for (int l = 0; l < i; ++l) s -= L[i][l] * z[l];
-      z[i] = s * inv_diag[i];
+      for (int l = 0; l < n; ++l) acc[l] = s.r[c][i][l];
+      for (int k = 0; k < i; ++k)
+        for (int l = 0; l < n; ++l) acc[l] -= L[i][k][l] * z[k][l];
+      for (int l = 0; l < n; ++l) z[i][l] = acc[l] * inv[i][l];
     }
     // NOTE: with the constant as the last unknown, L^T beta = z gives it directly.
-    out[c] = float(z[k_dims - 1] * inv_diag[k_dims - 1]);
-    if (!std::isfinite(out[c])) return false;
+    for (int l = 0; l < n; ++l) {
+      const float beta = z[k_dims - 1][l] * inv[k_dims - 1][l];
+      const float mean = s.r[c][k_dims - 1][l] / s.m[k_dims - 1][k_dims - 1][l];
+      s.out[c][l] = (ok[l] != 0.f && std::isfinite(beta)) ? beta : mean;
+    }
   }
-  return true;
 }
 
 /// First-order regression of one half (Y, 4 floats per padded pixel) on the features X (8
@@ -322,25 +349,13 @@ void regress(const float* Y, const float* X, const Planes& g, const Planes& v,
   struct Scratch {
     DistanceScratch d;
     std::vector<float> dist, w;
-  };
-  auto finish = [&](const V8 (&mv)[k_dims], const V8 (&rv)[3], const float* lo, const float* hi, Planes& o, int x,
-                    int y) {
-    float m[k_dims][k_dims], r[3][k_dims];
-    std::memcpy(m, mv, sizeof m);
-    std::memcpy(r, rv, sizeof r);
-    float est[3];
-    if (!solve_constant(m, r, st.ridge, est)) {
-      // Not solvable: the weighted mean (zeroth order).
-      for (int c = 0; c < 3; ++c) est[c] = r[c][k_dims - 1] / m[k_dims - 1][k_dims - 1];
-    }
-    // NOTE: not in NFOR: the regression may extrapolate where a feature changes little and
-    // its slope is ill-determined; the estimate is kept within the range of the values of
-    // the neighbours of weight >= 1e-2 (the centre among them).
-    for (int c = 0; c < 3; ++c) o.plane(c)[o.index(x, y)] = std::min(std::max(est[c], lo[c]), hi[c]);
+    std::unique_ptr<Systems> sys{new Systems};
+    float lo[3][k_tile_w], hi[3][k_tile_w];
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
   for_each_tile(W, H, [&](const TileRect& t) {
     Scratch& s = scratch.local();
+    Systems& sys = *s.sys;
     const int n = t.w * t.h;
     s.dist.resize(n);
     s.w.resize(size_t(n_off) * n);
@@ -387,18 +402,31 @@ void regress(const float* Y, const float* X, const Planes& g, const Planes& v,
               hi[c] = std::max(hi[c], yq[c]);
             }
         }
-        V8 m1[k_dims], m2[k_dims], r1[3], r2[3];
-        for (int a = 0; a < k_dims; ++a) {
-          m1[a] = __builtin_shufflevector(m[a], m[a], 0, 1, 2, 3, 4, 5, 6, 7);
-          m2[a] = __builtin_shufflevector(m[a], m[a], 8, 9, 10, 11, 12, 13, 14, 15);
-        }
+        // Candidate k into lane x, candidate k / 2 into lane t.w + x.
+        for (int a = 0; a < k_dims; ++a)
+          for (int b = 0; b < k_dims; ++b) {
+            sys.m[a][b][x] = m[a][b];
+            sys.m[a][b][t.w + x] = m[a][b + 8];
+          }
         for (int c = 0; c < 3; ++c) {
-          r1[c] = __builtin_shufflevector(r[c], r[c], 0, 1, 2, 3, 4, 5, 6, 7);
-          r2[c] = __builtin_shufflevector(r[c], r[c], 8, 9, 10, 11, 12, 13, 14, 15);
+          for (int b = 0; b < k_dims; ++b) {
+            sys.r[c][b][x] = r[c][b];
+            sys.r[c][b][t.w + x] = r[c][b + 8];
+          }
+          s.lo[c][x] = lo[c];
+          s.hi[c][x] = hi[c];
         }
-        finish(m1, r1, lo, hi, out_k[0], t.x0 + x, t.y0 + y);
-        finish(m2, r2, lo, hi, out_k[1], t.x0 + x, t.y0 + y);
       }
+      solve_batch(sys, 2 * t.w, st.ridge);
+      // NOTE: not in NFOR: the regression may extrapolate where a feature changes little and
+      // its slope is ill-determined; the estimate is kept within the range of the values of
+      // the neighbours of weight >= 1e-2 (the centre among them).
+      for (int cand = 0; cand < 2; ++cand)
+        for (int c = 0; c < 3; ++c) {
+          float* dst = out_k[cand].plane(c) + out_k[cand].index(t.x0, t.y0 + y);
+          for (int x = 0; x < t.w; ++x)
+            dst[x] = std::min(std::max(sys.out[c][cand * t.w + x], s.lo[c][x]), s.hi[c][x]);
+        }
     }
   });
 }
