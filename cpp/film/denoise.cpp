@@ -330,7 +330,7 @@ void solve_batch(Systems& s, int count, float ridge) {
   }
 }
 
-/// First-order regression of one half (Y, 4 floats per padded pixel) on the features X (8
+/// First-order regression of one half (img, 3 planes) on the features X (8
 /// floats per padded pixel, same layout as the planes), weights from the other half (guide
 /// g, variance v), at bandwidths k and k / 2: into out_k[0] (k) and out_k[1] (k / 2), 3
 /// planes each.
@@ -338,7 +338,7 @@ void solve_batch(Systems& s, int count, float ridge) {
 /// sum_q w_pq (y_q - beta^T x_q)^2 over the window, with x_q = the features of q minus those
 /// of p (and 1): the estimate at p is beta's constant term. Unlike Tungsten's collaborative
 /// variant only the centre is reconstructed (one solve per pixel, no gather of windows).
-void regress(const float* Y, const float* X, const Planes& g, const Planes& v,
+void regress(const Planes& img, const float* X, const Planes& g, const Planes& v,
              const DenoiseSettings& st, Planes* out_k) {
   const int W = g.width, H = g.height, R = st.radius, F = st.patch_radius;
   const int side = 2 * R + 1, n_off = side * side;
@@ -387,7 +387,7 @@ void regress(const float* Y, const float* X, const Planes& g, const Planes& v,
           // NOTE: the weight at bandwidth k / 2 is exp(-d / (k/2)^2) = (exp(-d / k^2))^4.
           const float w2 = (w1 * w1) * (w1 * w1);
           const size_t q = size_t(ptrdiff_t(p) + shifts[size_t(o)]);
-          const float* yq = &Y[q * 4];
+          const float yq[3] = {img.plane(0)[q], img.plane(1)[q], img.plane(2)[q]};
           V8 d;
           std::memcpy(&d, &X[q * k_dims], sizeof d);
           d -= xc;
@@ -665,13 +665,14 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   }
   var.fill_border();
 
-  // --- Regression features, 8 per padded pixel: x / R, y / R, depth, normal, mean albedo, 1.
-  std::unique_ptr<float[]> X[2], Y[2];
+  // --- Regression features, 8 per padded pixel: x / R, y / R, depth, normal, mean albedo, 1
+  // (one set when both halves share their features).
+  const bool same_features = !(split_features && st.feature_radius > 0);
+  std::unique_ptr<float[]> X[2];
   const size_t padded = feat[0].plane_size;
   const float inv_r = 1.f / float(st.radius);
-  for (int h = 0; h < 2; ++h) {
+  for (int h = 0; h < (same_features ? 1 : 2); ++h) {
     X[h].reset(new float[padded * k_dims]);
-    Y[h].reset(new float[padded * 4]);
     for_rows(-pad, H + pad, [&](int y) {
       for (int x = -pad; x < W + pad; ++x) {
         const size_t p = feat[h].index(x, y);
@@ -684,10 +685,11 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
         f[5] = feat[h].plane(5)[p];
         f[6] = (feat[h].plane(0)[p] + feat[h].plane(1)[p] + feat[h].plane(2)[p]) * (1.f / 3.f);
         f[7] = 1.f;
-        for (int c = 0; c < 3; ++c) Y[h][p * 4 + c] = rad[h].plane(c)[p];
       }
     });
   }
+  for (auto& f : feat) f.data.reset();
+  const float* features[2] = {X[0].get(), same_features ? X[0].get() : X[1].get()};
 
   // --- Cross-filtered regression: half A with weights from B (and B's features), and back.
   // NOTE: NFOR sec. 5.2: the weights of one half come from the other, so a half's filtered
@@ -695,11 +697,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   Planes cand[2][2];  // [half][bandwidth k, k / 2]
   for (int h = 0; h < 2; ++h) {
     for (int b = 0; b < 2; ++b) cand[h][b].allocate(3, W, H, pad);
-    regress(Y[h].get(), X[1 - h].get(), rad[1 - h], var, st, cand[h]);
-  }
-  if (!st.second_pass) {
-    for (auto& v : X) v.reset();
-    for (auto& v : Y) v.reset();
+    regress(rad[h], features[1 - h], rad[1 - h], var, st, cand[h]);
   }
 
   // --- Error of each candidate, from the halves.
@@ -777,17 +775,12 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
     blend_var.fill_border();
     box3(blend_var, smooth_var);
     smooth_var.fill_border();
-    for_rows(-pad, H + pad, [&](int y) {
-      for (int x = -pad; x < W + pad; ++x) {
-        const size_t p = blended.index(x, y);
-        for (int c = 0; c < 3; ++c) Y[0][p * 4 + c] = blended.plane(c)[p];
-      }
-    });
     Planes second[2];
     for (auto& b : second) b.allocate(3, W, H, pad);
-    regress(Y[0].get(), X[0].get(), blended, smooth_var, st, second);
+    regress(blended, features[0], blended, smooth_var, st, second);
     blended = std::move(second[0]);
   }
+  for (auto& f : X) f.reset();
 
   // --- Remodulate, add the outliers back.
   for_rows(0, H, [&](int y) {
