@@ -25,7 +25,7 @@ struct DenoiseInput {
 /// Settings of denoise(); the defaults are the ones measured in docs/denoise.md.
 struct DenoiseSettings {
   /// Half-size of the regression window ((2r+1)^2 neighbours; NFOR: 9).
-  int radius = 5;
+  int radius = 4;
   /// Half-size of the NL-means patches of the regression weights (NFOR: 3; 1 measured better
   /// here, docs/denoise.md).
   int patch_radius = 1;

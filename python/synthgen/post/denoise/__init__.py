@@ -19,7 +19,7 @@ __all__ = ["denoise", "SETTINGS"]
 
 #: The settings denoise() accepts, with their defaults (cpp/film/denoise.h DenoiseSettings).
 SETTINGS = {
-    "radius": 5,
+    "radius": 4,
     "patch_radius": 1,
     "k": 1.0,
     "feature_radius": 5,
