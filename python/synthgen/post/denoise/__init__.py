@@ -1,6 +1,8 @@
-"""Feature-guided denoising of a render from its two half-sample images (a reduced NFOR:
-Bitterli et al. 2016, "Nonlinearly Weighted First-Order Regression for Denoising Monte Carlo
-Renderings"); docs/denoise.md gives the algorithm, its settings and its measured quality.
+"""Feature-guided denoising of a render from its two half-sample images, a reduced NFOR.
+
+NFOR: Bitterli and colleagues 2016, "Nonlinearly Weighted First-Order Regression for Denoising
+Monte Carlo Renderings"; docs/denoise.md gives the algorithm, its settings and its measured
+quality.
 
     res = scene.render(spp=16, max_depth=6, seed=1)
     img = denoise(res.rgb_even, res.rgb_odd, res.albedo, res.normal, res.depth)
