@@ -530,8 +530,9 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   }
 
   // --- Demodulation: radiance / max(albedo, floor), the albedo being the halves' mean.
-  // NOTE: albedo demodulation (Zimmer et al. 2015; Bako et al. 2017's diffuse/albedo
-  // split): texture is divided out before filtering and multiplied back after, so the filter
+  // NOTE: albedo demodulation (as Bako et al. 2017, "Kernel-predicting convolutional
+  // networks", do for the diffuse part, and Schied et al. 2017, SVGF): texture is divided
+  // out before filtering and multiplied back after, so the filter
   // sees the smooth irradiance and the texture stays sharp. The floor keeps black albedo
   // (background, emitters) finite; the same divisor is used both ways, so a noise-free
   // image is returned unchanged.

@@ -186,6 +186,22 @@ TEST(Denoise, NoisyFeatureHalvesArePrefiltered) {
   EXPECT_LT(se, 0.25 * se_in);
 }
 
+TEST(Denoise, SecondPassRemovesNoiseToo) {
+  Buffers buf(48, 32);
+  fill(buf, 0.05f, 13, [](uint32_t x, uint32_t, int) { return x < 24 ? 0.2f : 0.6f; });
+  sg::DenoiseSettings s;
+  s.second_pass = true;
+  const std::vector<float> out = buf.run(s);
+  double se = 0.0, se_in = 0.0;
+  for (size_t i = 0; i < out.size(); ++i) {
+    const double truth = (i / 3) % buf.w < 24 ? 0.2 : 0.6;
+    se += (out[i] - truth) * (out[i] - truth);
+    const double m = 0.5 * (buf.a[i] + buf.b[i]) - truth;
+    se_in += m * m;
+  }
+  EXPECT_LT(se, 0.1 * se_in);
+}
+
 TEST(Denoise, BadInputThrows) {
   Buffers buf(8, 8);
   std::vector<float> out(buf.a.size());
