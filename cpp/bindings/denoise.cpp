@@ -40,7 +40,8 @@ void bind_denoise(py::module_& m) {
       [](const py::object& rgb_even, const py::object& rgb_odd, const py::object& albedo_even,
          const py::object& albedo_odd, const py::object& normal_even, const py::object& normal_odd,
          const py::object& depth_even, const py::object& depth_odd, const py::object& variance, int radius,
-         int patch_radius, float k, int feature_radius, int selection_radius, float albedo_floor, float ridge, float firefly_ratio, bool second_pass) {
+         int patch_radius, float k, int feature_radius, int selection_radius, float albedo_floor, float ridge,
+         float firefly_ratio, bool second_pass) {
         FloatArray first = FloatArray::ensure(rgb_even);
         if (!first || first.ndim() != 3 || first.shape(2) != 3 || first.shape(0) == 0 || first.shape(1) == 0)
           throw Error("denoise: rgb_even must be a non-empty H x W x 3 float array");
@@ -97,8 +98,9 @@ void bind_denoise(py::module_& m) {
       "by their error estimated from the halves, albedo demodulation. Optional `variance`: the\n"
       "variance of the mean (RenderResult.variance); without it the halves' difference is used.\n"
       "Settings: radius (window half-size), patch_radius, k, feature_radius (feature prefilter),\n"
-      "selection_radius, albedo_floor (0: no demodulation), ridge, firefly_ratio (0: off), second_pass. Deterministic for any number of\n"
-      "threads. Raises SynthgenError on bad shapes or settings. Use synthgen.post.denoise.denoise.");
+      "selection_radius, albedo_floor (0: no demodulation), ridge, firefly_ratio (0: off), second_pass.\n"
+      "Deterministic for any number of threads. Raises SynthgenError on bad shapes or settings.\n"
+      "Use synthgen.post.denoise.denoise.");
 }
 
 }  // namespace sg::bindings

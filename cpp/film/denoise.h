@@ -46,7 +46,7 @@ struct DenoiseSettings {
   float ridge = 1e-3f;
   /// Outliers: a half's value above firefly_ratio x the other half's 3 x 3 maximum (+ its
   /// image mean) is clamped before filtering and the excess added back spread over the
-  /// window (the image's mean is kept); 0 disables.
+  /// window, adding at most 10% to a pixel (beyond that it is dropped); 0 disables.
   float firefly_ratio = 2.f;
   /// NFOR's second pass: the averaged result filtered once more (about 1.5 x the cost).
   bool second_pass = false;

@@ -126,7 +126,8 @@ TEST(Denoise, NoisyLinearRampIsReproducedToTheBorder) {
 
 TEST(Denoise, SameBytesForOneAndTwoThreads) {
   Buffers buf(70, 45);  // not a multiple of the tile size
-  fill(buf, 0.1f, 7, [](uint32_t x, uint32_t y, int c) { return 0.3f + 0.2f * float((x / 9 + y / 7) % 2) + 0.05f * c; });
+  fill(buf, 0.1f, 7,
+       [](uint32_t x, uint32_t y, int c) { return 0.3f + 0.2f * float((x / 9 + y / 7) % 2) + 0.05f * c; });
   buf.a[3 * 500] = 40.f;  // a firefly
   std::vector<float> one, two;
   tbb::task_arena(1).execute([&] { one = buf.run(); });
