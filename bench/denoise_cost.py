@@ -55,7 +55,10 @@ def main(argv=None) -> int:
                 t = time.perf_counter()
                 res = scene.render(spp=args.spp, max_depth=depth, seed=71 + i)
                 render_s.append(time.perf_counter() - t)
-            bufs = [np.asarray(b) for b in (res.rgb_even, res.rgb_odd, res.albedo, res.normal, res.depth)]
+            # What render(..., denoise=True) runs: the halves and the sample-averaged feature halves.
+            bufs = [np.asarray(res.rgb_even), np.asarray(res.rgb_odd)] + [
+                (np.asarray(getattr(res, f"{k}_even")), np.asarray(getattr(res, f"{k}_odd")))
+                for k in ("albedo", "normal", "depth")]
             t = time.perf_counter()
             denoise(*bufs)
             denoise_s.append(time.perf_counter() - t)

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "film/film.h"
 #include "integrator/interaction.h"
 
 namespace sg {
@@ -641,6 +642,7 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   m_render_scene.camera = m_camera;
   uint64_t alpha_calls_before = m_accel->alpha_test_calls();
   render_path_traced(m_render_scene, settings, film);
+  if (settings.denoise && !settings.labels_only) denoise_film(film);
   film->stats.alpha_test_calls = m_accel->alpha_test_calls() - alpha_calls_before;
   film->stats.mesh_bvh_builds = m_stats.mesh_bvh_builds;
   film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last_commit;

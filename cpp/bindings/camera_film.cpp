@@ -25,6 +25,7 @@ py::dict stats_to_dict(const RenderStats& s) {
   d["alpha_test_calls"] = s.alpha_test_calls;
   d["threads"] = s.threads;
   d["estimated_psnr_db"] = s.estimated_psnr_db;
+  d["denoise_time_s"] = s.denoise_time_s;
   return d;
 }
 
@@ -190,6 +191,14 @@ void bind_render_result(py::module_& m) {
       .def_property_readonly(
           "depth_odd", [](std::shared_ptr<Film> f) { return wrap(f, f->depth_odd, {f->height, f->width}); },
           "H x W float32: depth_even over the odd-numbered samples.")
+      .def_property_readonly(
+          "rgb_noisy",
+          [](std::shared_ptr<Film> f) -> py::object {
+            if (f->rgb_noisy.empty()) return py::none();
+            return wrap(f, f->rgb_noisy, {f->height, f->width, 3});
+          },
+          "H x W x 3 float32: rgb before denoising when the render denoised (render(..., denoise=True): rgb is\n"
+          "then the denoised image); None otherwise.")
       .def_property_readonly(
           "sample_count", [](std::shared_ptr<Film> f) { return wrap(f, f->sample_count, {f->height, f->width}); },
           "H x W uint32: the samples each pixel got (spp; with adaptive sampling, its own count).")

@@ -455,7 +455,7 @@ a BVH build). render() commits pending edits first.)doc")
       .def("render",
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
               uint32_t tile_size, bool texture_filtering, float exposure, float clamp_indirect, float noise_threshold,
-              float target_psnr, uint32_t min_spp, uint32_t max_spp, bool labels_only) {
+              float target_psnr, uint32_t min_spp, uint32_t max_spp, bool denoise, bool labels_only) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -470,6 +470,7 @@ a BVH build). render() commits pending edits first.)doc")
              rs.target_psnr = target_psnr;
              rs.min_spp = min_spp;
              rs.max_spp = max_spp;
+             rs.denoise = denoise;
              rs.labels_only = labels_only;
              auto film = std::make_shared<Film>();
              {
@@ -488,7 +489,8 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("noise_threshold") = render_default<float>("noise_threshold"),
            py::arg("target_psnr") = render_default<float>("target_psnr"),
            py::arg("min_spp") = render_default<uint32_t>("min_spp"),
-           py::arg("max_spp") = render_default<uint32_t>("max_spp"), py::arg("labels_only") = false,
+           py::arg("max_spp") = render_default<uint32_t>("max_spp"),
+           py::arg("denoise") = render_default<bool>("denoise"), py::arg("labels_only") = false,
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
            "centre ray's coverage).")

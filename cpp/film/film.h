@@ -23,6 +23,7 @@ struct RenderStats {
   uint32_t threads = 0;
   /// Adaptive sampling: the image's estimated PSNR (dB) when it stopped (0 otherwise).
   double estimated_psnr_db = 0.0;
+  double denoise_time_s = 0.0;  ///< RenderSettings::denoise: the denoiser's wall time (in wall_time_s too)
 };
 
 struct Film {
@@ -49,6 +50,9 @@ struct Film {
   /// sample's first vertex that is not a Dirac delta (after up to 3 mirror / glass
   /// bounces); escaped samples count as albedo 1, normal 0, a depth beyond the scene.
   std::vector<float> albedo_even, albedo_odd, normal_even, normal_odd, depth_even, depth_odd;
+  /// With RenderSettings::denoise: rgb before denoising (H x W x 3; rgb is then the denoised
+  /// image); empty otherwise.
+  std::vector<float> rgb_noisy;
   /// Samples each pixel got (H x W): spp, or with adaptive sampling its own count.
   std::vector<uint32_t> sample_count;
 
@@ -69,5 +73,10 @@ struct Film {
 
   void allocate(uint32_t w, uint32_t h, bool differential = false);
 };
+
+/// RenderSettings::denoise: moves rgb to rgb_noisy and writes the denoised image (film/denoise.h,
+/// default settings) from the half-sample images and the feature halves into rgb; adds the time
+/// to stats (denoise_time_s and wall_time_s). Labels and the differential buffers are untouched.
+void denoise_film(Film* film);
 
 }  // namespace sg

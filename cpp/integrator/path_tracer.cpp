@@ -44,6 +44,8 @@ PluginInfo render_info() {
       .add(param::integer("min_spp", 0, "adaptive sampling: samples every pixel gets first (0: max(16, sqrt("
                                         "max_spp)), rounded up to whole rounds of 16)").in(0, 1 << 20))
       .add(param::integer("max_spp", 0, "adaptive sampling: most samples of a pixel (0: spp)").in(0, 1 << 20))
+      .add(param::boolean("denoise", false, "denoise rgb after rendering (the feature-guided denoiser; the raw "
+                                            "image stays available); labels are never filtered"))
       .add(param::real("clamp_indirect", 0.0, "largest sum of RGB (displayed units, 1 = white) one indirect "
                                               "contribution of a sample may add; 0: no clamping (removes "
                                               "fireflies of caustics at the cost of some energy)").at_least(0));
@@ -60,6 +62,7 @@ std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const Pl
   rs->texture_filtering = p.get_bool("texture_filtering");
   rs->exposure = p.get_float("exposure");
   rs->clamp_indirect = p.get_float("clamp_indirect");
+  rs->denoise = p.get_bool("denoise");
   rs->noise_threshold = p.get_float("noise_threshold");
   rs->target_psnr = p.get_float("target_psnr");
   rs->min_spp = uint32_t(p.get_int("min_spp"));

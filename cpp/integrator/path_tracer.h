@@ -45,6 +45,9 @@ struct RenderSettings {
   static constexpr uint32_t adaptive_step() { return 16; }
   /// The samples every pixel gets before adaptive stopping, a whole number of rounds.
   uint32_t min_samples() const;
+  /// Denoise rgb after rendering (film/denoise.h, from the film's half-sample images and
+  /// feature halves); the raw image stays in Film::rgb_noisy. Labels are never filtered.
+  bool denoise = false;
   /// Only the label outputs (depth, normal, albedo, ids, from the pixel-centre ray); rgb is
   /// left 0 and alpha is 1 where the pixel-centre ray hits. For masks (e.g. amodal ones).
   bool labels_only = false;

@@ -233,6 +233,8 @@ class FrameRenderer:
         self.scene.commit()
         from ..post.quality import exposure_scale
 
+        if rs["denoise"] and fp is not None:  # check_inputs reports it at the YAML key first
+            raise SynthgenError("render.denoise is not available with photo backgrounds yet")
         res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure_scale(spec.post),
                                 **{k: rs[k] for k in RENDER_KEYS if k != "threads"})
         t_render = time.perf_counter()
@@ -273,6 +275,8 @@ class FrameRenderer:
             # The render's estimated error against its converged image (from its half-sample
             # images; after the scene's exposure): synthgen.post.quality.
             "noise": self._noise(res, spec.post),
+            # Which image rgb is: the render's mean ("raw") or the denoiser's output ("denoised").
+            "rgb": "denoised" if rs["denoise"] else "raw",
             # What this frame shares with others, for the train/val split (outputs.split): its
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],

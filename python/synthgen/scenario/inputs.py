@@ -9,7 +9,7 @@ constants, so a broken file or an impossible combination of parameters is report
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Tuple
 
 from .._core import Scene, SynthgenError
 from ..schema import distributions as D
@@ -170,6 +170,11 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
 
         bg = spec["background"]
         loc = spec.locs.get("background", spec.loc)
+        if spec["render"]["denoise"]:
+            rl = spec["render"].locs.get("denoise", spec["render"].loc)
+            raise SceneFileError(sc.source, rl.line, rl.column, rl.path,
+                                 "not available with photo backgrounds yet: their composite is "
+                                 "built from the differential buffers, which the denoiser does not filter")
         try:
             ps = PhotoSet(bg, sc.base_dir, sc.seed)
             ps.check_count(int(spec["count"]))
