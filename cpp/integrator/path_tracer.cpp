@@ -86,6 +86,12 @@ void RenderSettings::validate() const {
   if (!(clamp_indirect >= 0.f)) throw Error("render settings: clamp_indirect must be 0 (off) or positive");
   if (!(noise_threshold >= 0.f) || !(target_psnr >= 0.f))
     throw Error("render settings: noise_threshold and target_psnr must be 0 (off) or positive");
+  // NOTE: the denoiser weighs each half-sample image by the other and estimates the noise from
+  // their difference; with one sample a pixel has one half only (measured on the Cornell box at
+  // 256 x 192: 19.7 dB denoised against 26.1 dB raw).
+  if (denoise && !labels_only && spp < 2)
+    throw Error("render settings: denoise needs at least 2 samples per pixel (its two half-sample images); "
+                "spp is " + std::to_string(spp));
   if (adaptive() && min_spp && min_spp > max_samples())
     throw Error("render settings: min_spp (" + std::to_string(min_spp) + ") is more than the most samples a pixel "
                 "gets (max_spp or spp: " + std::to_string(max_samples()) + ")");

@@ -212,3 +212,11 @@ outputs: [rgb]
     sc = load_scenario(road, overrides=[("render.denoise", True)])
     with pytest.raises(SceneFileError, match="photo backgrounds"):
         check_inputs(sc)
+
+
+def test_denoise_needs_two_samples_per_pixel():
+    """With one sample a pixel has one half-sample image only: an error, not a worse image."""
+    scene, depth, _, _ = _scene("sunlit")
+    with pytest.raises(Exception, match="denoise needs at least 2 samples"):
+        scene.render(spp=1, max_depth=depth, denoise=True)
+    scene.render(spp=2, max_depth=depth, denoise=True)

@@ -81,8 +81,10 @@ class Method:
     ladder: Callable[[Options], List[Tuple[str, Dict[str, Any]]]]  # [(budget label, settings)]
 
 
-def _spp_ladder(extra: Callable[[int, Options], Dict[str, Any]]) -> Callable[[Options], List[Tuple[str, Dict[str, Any]]]]:
-    return lambda o: [(f"{b} spp", dict(spp=int(b), **extra(int(b), o))) for b in o.budgets]
+def _spp_ladder(extra: Callable[[int, Options], Dict[str, Any]],
+               least: int = 1) -> Callable[[Options], List[Tuple[str, Dict[str, Any]]]]:
+    """Budgets of `least` spp and more (the denoiser needs 2: its two half-sample images)."""
+    return lambda o: [(f"{b} spp", dict(spp=int(b), **extra(int(b), o))) for b in o.budgets if int(b) >= least]
 
 
 def _cycles_ladder(o: Options) -> List[Tuple[str, Dict[str, Any]]]:
@@ -98,7 +100,8 @@ METHODS: Tuple[Method, ...] = (
     Method("adaptive", "synthgen", "adaptive sampling: max_spp = the budget, noise_threshold (default 0.01)",
            _spp_ladder(lambda b, o: {"max_spp": b, "noise_threshold": float(o.noise_threshold)})),
     Method("adaptive+denoise", "synthgen", "adaptive as above, then the denoiser (render(..., denoise=True))",
-           _spp_ladder(lambda b, o: {"max_spp": b, "noise_threshold": float(o.noise_threshold), "denoise": True})),
+           _spp_ladder(lambda b, o: {"max_spp": b, "noise_threshold": float(o.noise_threshold), "denoise": True},
+                       least=2)),
     Method("cycles", "cycles", "Blender Cycles CPU, its adaptive sampling: samples = the budget as the maximum, "
            "adaptive_threshold (default 0.01, 0 = Cycles' automatic); or time_limit budgets", _cycles_ladder),
     Method("embree", "embree", "Embree's tutorial pathtracer, spp = the budget (no adaptive sampling)",
