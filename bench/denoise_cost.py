@@ -55,9 +55,10 @@ def main(argv=None) -> int:
                 t = time.perf_counter()
                 res = scene.render(spp=args.spp, max_depth=depth, seed=71 + i)
                 render_s.append(time.perf_counter() - t)
-            # What render(..., denoise=True) runs: the halves and the sample-averaged feature halves.
+            # What render(..., denoise=True) runs: the halves and the features' means over all
+            # samples (cpp/film/film.cpp denoise_film; equal halves here: spp even).
             bufs = [np.asarray(res.rgb_even), np.asarray(res.rgb_odd)] + [
-                (np.asarray(getattr(res, f"{k}_even")), np.asarray(getattr(res, f"{k}_odd")))
+                0.5 * (np.asarray(getattr(res, f"{k}_even")) + np.asarray(getattr(res, f"{k}_odd")))
                 for k in ("albedo", "normal", "depth")]
             t = time.perf_counter()
             denoise(*bufs)

@@ -75,7 +75,7 @@ struct Film {
 };
 
 /// RenderSettings::denoise: moves rgb to rgb_noisy and writes the denoised image (film/denoise.h,
-/// default settings) from the half-sample images and the feature halves into rgb; adds the time
+/// default settings) from the half-sample images and the features' means into rgb; adds the time
 /// to stats (denoise_time_s and wall_time_s). Labels and the differential buffers are untouched.
 void denoise_film(Film* film);
 
