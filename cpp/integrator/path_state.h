@@ -1,0 +1,179 @@
+// The path tracer's per-path and per-pixel state (integrator/path_tracer.cpp, its only user):
+// the sample-dimension layout, one camera path's state, a vertex's sampler keys, the local
+// ray probes of materials (ambient occlusion, convex edges) and a pixel's sample sums.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "core/rng.h"
+#include "film/film.h"
+#include "integrator/interaction.h"
+#include "integrator/render_scene.h"
+
+namespace sg::path_detail {
+
+// Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex:
+// (+0, +1) light position, (+2, +3) BSDF direction — the 2D-stratified pairs of
+// PixelSampler — then +4 light choice, +5 BSDF lobe (a pair too), +6 Russian roulette
+// (unstratified), (+8, +9) the dome light's direction, +10 the dome's choice (a pair with
+// the unused +11): the two light groups' samples (RenderScene::group_lights).
+constexpr uint32_t k_dims_per_vertex = 12;
+
+struct PathCounters {
+  uint64_t rays = 0;
+  uint64_t nan = 0;
+};
+
+/// State of one camera path. Paths of the same pixel advance together in packets of
+/// up to k_packet_size so that Embree can trace their rays with packet traversal; every lane does
+/// exactly what a scalar path tracer would do, so results do not depend on packing.
+struct PathState {
+  Ray ray;
+  Color L{0.f}, beta{1.f};
+  /// NEE contributions of the light groups, each added if its shadow ray is unoccluded.
+  Color shadow_contrib[RenderScene::k_light_groups];
+  float prev_pdf = 0.f;
+  /// Where the previous vertex chose its lights, each group's light weights' sum there
+  /// (RenderScene::pick_light) and the normal lights sampled by (LightSampleContext::n): the
+  /// MIS weight of emission the next segment finds reuses them.
+  Vec3f prev_p{0.f}, prev_n{0.f};
+  float prev_light_total[RenderScene::k_light_groups] = {0.f, 0.f};
+  uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
+  uint32_t bounce = 0;
+  bool prev_delta = true;  ///< the camera "sampled" the first direction
+  /// Every bounce so far was a glossy or specular lobe: the camera sees a reflection (of a
+  /// reflection ...): only such paths see reflection_only lights.
+  bool all_glossy = true;
+  /// Product of eta^2 over refractions: removes the 1/eta^2 radiance scaling from the
+  /// Russian-roulette decision (pbrt-v4 "etaScale"), so paths inside glass are not culled.
+  float eta_scale = 1.f;
+  bool active = true;
+  bool hit_geometry = false;
+  /// The denoiser's features of this sample (Film::albedo_even ...): albedo, shading normal
+  /// and path length at its first vertex that is not a Dirac delta (through mirrors and
+  /// glass, at most 3 bounces); the background's (albedo 1, normal 0, far) when it escapes.
+  Color feature_albedo{1.f};
+  Vec3f feature_normal{0.f};
+  float feature_depth = 0.f, path_length = 0.f;
+  bool feature_final = false;
+  /// Differential rendering (full-scene pass): the camera ray first hit an inserted
+  /// (non-catcher) object; the path met an inserted object somewhere (a hit, a shadow ray it
+  /// blocked, its emission sampled), so the path without the objects differs.
+  bool synthetic_first = false;
+  bool touched = false;
+  float cone_width = 0.f, cone_spread = 0.f;  ///< ray cone for texture filtering (ray_cone.h)
+};
+
+/// Pair keys (PixelSampler::pair_key) of one path vertex's sample dimensions. They depend
+/// only on (seed, pixel, bounce), so the lanes of a packet share them.
+struct VertexKeys {
+  uint32_t bounce = ~0u;
+  uint64_t light = 0, bsdf = 0, pick_lobe = 0, dome_light = 0, dome_pick = 0;
+  void update(uint32_t b, const PixelSampler& sampler) {
+    if (b == bounce) return;
+    uint32_t base = 2 + b * k_dims_per_vertex;
+    light = sampler.pair_key(base);
+    bsdf = sampler.pair_key(base + 2);
+    pick_lobe = sampler.pair_key(base + 4);
+    dome_light = sampler.pair_key(base + 8);
+    dome_pick = sampler.pair_key(base + 10);
+    bounce = b;
+  }
+};
+
+/// Ambient occlusion at a shading point: the fraction of `n` cosine-distributed rays of
+/// length `radius` over the hemisphere of the shading normal (on the side of `wo`) that hit
+/// nothing. Random numbers: unstratified dimensions `dim0`.. of the path's sampler.
+inline float estimate_ao(const RenderScene& sc, const SurfaceInteraction& si, const Vec3f& wo, float radius, int n,
+                         const PixelSampler& sampler, uint32_t dim0) {
+  float side = dot(si.ng, wo) >= 0.f ? 1.f : -1.f;
+  Vec3f nrm = si.ns * side, ng = si.ng * side;
+  Frame f(nrm);
+  int open = 0;
+  for (int j = 0; j < n; ++j) {
+    Vec2f u(sampler.get_independent(dim0 + 2 * uint32_t(j)), sampler.get_independent(dim0 + 2 * uint32_t(j) + 1));
+    Vec3f d = f.to_world(square_to_cosine_hemisphere(u));
+    if (dot(d, ng) <= 0.f) continue;  // below the geometric surface: occluded by it
+    Ray r;
+    r.o = offset_ray_origin(si.p, si.p_error, ng, d);
+    r.d = d;
+    r.t_max = radius;
+    open += !sc.accel->occluded(r);
+  }
+  return float(open) / float(n);
+}
+
+/// Convex-edge measure at an interaction: `n` rays (stratified in azimuth) from a point lifted a
+/// tenth of `radius` off the surface, heading along it and 15 degrees into it, at most `radius`
+/// long; the fraction that finds no surface.
+/// NOTE: over an open panel each ray meets the surface again (at 0.39 radius: lift / sin 15);
+/// near a convex edge (curvature radius under ~0.75 radius) or a sheet's border the surface
+/// falls away from the rays that cross it, which escape; creases stop them (they are AO's).
+inline float estimate_edges(const RenderScene& sc, const SurfaceInteraction& si, const Vec3f& wo, float radius,
+                            int n, const PixelSampler& sampler, uint32_t dim) {
+  float side = dot(si.ng, wo) >= 0.f ? 1.f : -1.f;
+  Vec3f ng = si.ng * side;
+  Frame f(ng);
+  const float lift = 0.1f * radius, c = 0.96592583f, s = 0.25881905f;  // cos, sin 15 degrees
+  Vec3f o = si.p + ng * (lift + 1e-4f * (1.f + std::fabs(si.p.x) + std::fabs(si.p.y) + std::fabs(si.p.z)));
+  float u = sampler.get_independent(dim);
+  int open = 0;
+  for (int j = 0; j < n; ++j) {
+    float phi = 6.2831853f * (float(j) + u) / float(n);
+    Vec3f d = f.to_world(Vec3f(c * std::cos(phi), c * std::sin(phi), -s));
+    Ray r;
+    r.o = o;
+    r.d = d;
+    r.t_max = radius;
+    open += !sc.accel->occluded(r);
+  }
+  return float(open) / float(n);
+}
+
+/// One pixel's sample statistics: the sums of its even- and odd-numbered samples (by sample
+/// index) and of the squares, in double (the variance is a small difference of large sums),
+/// and the sums of the halves' denoising features.
+struct PixelMoments {
+  double sum[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  double sq[3] = {0, 0, 0};
+  uint32_t n[2] = {0, 0};
+  float albedo[2][3] = {{0, 0, 0}, {0, 0, 0}}, normal[2][3] = {{0, 0, 0}, {0, 0, 0}}, depth[2] = {0, 0};
+
+  void add(uint32_t sample_index, const Color& l, const PathState& st, float far) {
+    const int h = int(sample_index & 1u);
+    const double v[3] = {l.x, l.y, l.z};
+    for (int c = 0; c < 3; ++c) {
+      sum[h][c] += v[c];
+      sq[c] += v[c] * v[c];
+      albedo[h][c] += st.feature_albedo[c];
+      normal[h][c] += st.feature_normal[c];
+    }
+    depth[h] += st.feature_depth > 0.f ? st.feature_depth : far;
+    ++n[h];
+  }
+  uint32_t count() const { return n[0] + n[1]; }
+  /// rgb (the mean of all samples), rgb_even / rgb_odd (the halves' means) and the variance
+  /// of the mean into the film at `pixel`.
+  void store(Film* film, uint64_t pixel) const {
+    const uint32_t total = count();
+    for (int c = 0; c < 3; ++c) {
+      const double s = sum[0][c] + sum[1][c];
+      const double mean = total ? s / total : 0.0;
+      film->rgb[3 * pixel + c] = float(mean);
+      film->rgb_even[3 * pixel + c] = n[0] ? float(sum[0][c] / n[0]) : 0.f;
+      film->rgb_odd[3 * pixel + c] = n[1] ? float(sum[1][c] / n[1]) : 0.f;
+      double var = total > 1 ? std::max(0.0, (sq[c] - s * mean) / double(total - 1)) / double(total) : 0.0;
+      film->variance[3 * pixel + c] = float(var);
+      film->albedo_even[3 * pixel + c] = n[0] ? albedo[0][c] / float(n[0]) : 0.f;
+      film->albedo_odd[3 * pixel + c] = n[1] ? albedo[1][c] / float(n[1]) : 0.f;
+      film->normal_even[3 * pixel + c] = n[0] ? normal[0][c] / float(n[0]) : 0.f;
+      film->normal_odd[3 * pixel + c] = n[1] ? normal[1][c] / float(n[1]) : 0.f;
+    }
+    film->depth_even[pixel] = n[0] ? depth[0] / float(n[0]) : 0.f;
+    film->depth_odd[pixel] = n[1] ? depth[1] / float(n[1]) : 0.f;
+  }
+};
+
+}  // namespace sg::path_detail
