@@ -149,7 +149,7 @@ def test_composite_is_no_worse_than_a_direct_render_off_the_rims(figures):
 def test_rims_leak_the_hidden_ground(figures):
     """The documented failure. With the uniform catcher the rim pixels' MSE is a multiple of a
     direct render's at the same spp (measured 3.0-3.9x over 4 seed sets; it is a bias: converged,
-    bench/failure_images_b.py, the rims' mean absolute error stays 4.4 % against 0.6 % with the
+    bench/failure_modes_cones_rims.py, the rims' mean absolute error stays 4.4 % against 0.6 % with the
     textured catcher). Bound 5x: the measured range with margin for seeds (the leak scales with
     the ground's contrast under the rim, 0.1 / 0.6 here). It must exceed 2x, and 2x the ring's
     and shadows' ratios (the failure is real and specific to rims), and with the textured

@@ -380,7 +380,7 @@ def test_every_wear_parameter_from_yaml(tmp_path):
             "      rust: {amount: 0.4, roughness: {uniform: [0.3, 0.6]}, bump: 0.001,\n"
             "             colors: [{position: 0.8, color: [0.5, 0.2, 0.05]},\n"
             "                      {position: 0.0, color: {hsv: {color: [0.1, 0.05, 0.02], v: 0.1}}}]}\n"
-            "      dirt: {amount: 0.3, color: [0.2, 0.15, 0.1], roughness: 0.9, ao_radius: 0.1}\n"
+            "      dirt: {amount: 0.3, color: [0.2, 0.15, 0.1], roughness: 0.9, ao_radius: 0.1, stochastic: false}\n"
             "      scratches: {density: 10, direction: {choice: [x, z]}, elongation: {uniform: [4, 12]},\n"
             "                  metal: copper, roughness: 0.3, depth: 0.001}\n"
             "      ice: {amount: 0.2, bump: 0.002, top_bias: 1.0}")
@@ -402,6 +402,7 @@ def test_every_wear_parameter_from_yaml(tmp_path):
             assert 0.3 <= w["rust"]["roughness"] <= 0.6 and w["rust"]["bump"] == 0.001
             assert [c[0] for c in w["rust"]["colors"]] == [0.0, 0.8], "ramp stops sorted by position"
             assert w["dirt"]["color"] == [0.2, 0.15, 0.1] and w["dirt"]["roughness"] == 0.9
+            assert w["dirt"]["stochastic"] is False and w["rust"]["stochastic"] is True
             sc = w["scratches"]
             assert sc["direction"] in ("x", "z") and 4 <= sc["elongation"] <= 12
             assert sc["metal"] == "copper" and sc["depth"] == 0.001

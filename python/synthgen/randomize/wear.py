@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any, Dict, List, Mapping, Tuple
 
-from ..schema.fields import REQUIRED, Choice, Field, Integer, ListOf, Number, Record, Vector
+from ..schema.fields import REQUIRED, Bool, Choice, Field, Integer, ListOf, Number, Record, Vector
 from ..schema.random import R
 from ..scene import wear
 from . import ObjectContext, Randomizer, register
@@ -24,6 +24,10 @@ def _wear_effect(amount: float, params: Dict[str, Field], doc: str) -> Record:
 _RAMP_STOP = Record({"position": Number(REQUIRED, min=0.0, max=1.0, doc="position in the ramp"),
                      "color": R(Vector(3, REQUIRED, min=0.0, max=1.0, broadcast=True, doc="linear RGB at that position"))})
 
+_STOCHASTIC = Bool(True, doc="shade secondary hits where the mask is fractional with one material, chosen by the "
+                               "mask (cheaper; noisier where the object is seen in a mirror or a wet road: "
+                               "docs/failure_modes.md); false: blend both")
+
 _SCALE_DOC = "noise features across the object (relative mapping: the same pattern at any model size)"
 
 # NOTE: the defaults are the presets' (synthgen.scene.wear), so that a scenario's
@@ -40,7 +44,8 @@ SCHEMA = Record({
                                                                "than about 0.75 of it count)")),
         "streaks": R(Number(0.5, min=0.0, max=4.0, doc="rust running down in vertical streaks (0: none)")),
         "from_scratches": R(Number(1.0, min=0.0, max=4.0, doc="rust creeping out from the scratches, when the "
-                                                              "instance also gets scratches (0: none)"))},
+                                                              "instance also gets scratches (0: none)")),
+        "stochastic": _STOCHASTIC},
         "rust with relief, starting at edges and scratches, more towards the bottom, running down in streaks "
         "(synthgen.scene.wear.rust)"),
     "dirt": _wear_effect(0.4, {
@@ -54,7 +59,8 @@ SCHEMA = Record({
         "roughness": R(Number(0.95, min=0.0, max=1.0, doc="dirt roughness")),
         "splash": R(Number(1.0, min=0.0, max=4.0, doc="droplets thrown up by the wheels, low on the body (0: none)")),
         "softness": R(Number(0.3, min=0.01, max=2.0, doc="how gradually the film thins out at its edges (mask "
-                                                         "units; small: sharp-edged patches)"))},
+                                                         "units; small: sharp-edged patches)")),
+        "stochastic": _STOCHASTIC},
         "road grime: a film densest low on the body, in creases and where the wheels splash, thinning with height "
         "(synthgen.scene.wear.dirt)"),
     "scratches": _wear_effect(1.0, {

@@ -91,7 +91,7 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
          bottom_bias: float = 0.6, roughness: float = 0.85, bump: float = 0.002,
          colors: Sequence = RUST_COLORS, edges: float = 1.0, edge_radius: float = 0.03,
          streaks: float = 0.5, from_scratches: float = 1.0,
-         scratch_lines: Optional[Mapping[str, Any]] = None) -> Any:
+         scratch_lines: Optional[Mapping[str, Any]] = None, stochastic: bool = True) -> Any:
     """Rust over ``base``, as it grows on painted steel: it starts at convex edges and sheet
     borders, where paint is thinnest and chips first (the ``edges`` texture: short rays along
     the surface, ``edge_radius`` metres; weight ``edges``), spreads as an fBm front in
@@ -102,7 +102,9 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
     :func:`add_scratch_lines` -- the rust then follows those strokes, a halo four times their
     width, weight ``from_scratches``), covering ``amount`` of the object; the rust
     has a colour-ramp fBm and a turbulence bump of ``bump`` metres: Lambertian for ``roughness``
-    >= 0.8 (the default 0.85), else a principled material of that roughness."""
+    >= 0.8 (the default 0.85), else a principled material of that roughness. ``stochastic``: the
+    mix shades secondary hits where the mask is fractional with one material, chosen by the mask
+    (cheaper, unbiased, noisier in reflections: docs/failure_modes.md); False blends both."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 2.0)
@@ -150,7 +152,7 @@ def rust(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.35, scale
         wear = scene.add_material("principled", {"base_color": TextureRef(color), "roughness": float(roughness),
                                                  "metallic": 0.0, "bump_map": TextureRef(bump_tex),
                                                  "bump_scale": float(bump)})
-    return _mix(scene, base, wear, mask, stochastic=True)
+    return _mix(scene, base, wear, mask, stochastic=bool(stochastic))
 
 
 def add_scratch_lines(scene: Scene, *, seed: int = 0, density: float = 8.0, width: float = 0.04,
@@ -261,7 +263,7 @@ def ice(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.5, scale: 
 def dirt(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.4, scale: float = 5.0,
          bottom_bias: float = 1.0, ao_radius: float = 0.3, ao_weight: float = 1.0,
          color: Sequence[float] = (0.12, 0.09, 0.06), roughness: float = 0.95, splash: float = 1.0,
-         wheels: Sequence[float] = (), softness: float = 0.3) -> Any:
+         wheels: Sequence[float] = (), softness: float = 0.3, stochastic: bool = True) -> Any:
     """Dirt on ``base``, as road grime settles: a film that is densest low on the body and thins
     with height (relative-local height, ``bottom_bias``), gathers in creases and corners (1 - AO
     from 4 rays of ``ao_radius`` metres at the shading point, ``ao_weight``), is splashed up by
@@ -270,7 +272,7 @@ def dirt(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.4, scale:
     length), varies softly over the body (fBm, ``scale``) with soft edges (``softness``, in
     mask units: a film, not blobs), and is darker in creases (its colour times 0.55 + 0.45 AO).
     ``amount`` is the fraction covered in the open (AO 1), creases get more. The dirt is a rough
-    principled material of ``color``."""
+    principled material of ``color``. ``stochastic``: as for :func:`rust`."""
     amount = _check("amount", amount, 0.0, 1.0)
     _check("scale", scale, 1e-3, 1e3)
     bottom_bias = _check("bottom_bias", bottom_bias, 0.0, 4.0)
@@ -321,7 +323,7 @@ def dirt(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.4, scale:
         wear = scene.add_material("principled", {"base_color": TextureRef(shade), "roughness": float(roughness)})
     else:
         wear = scene.add_material("principled", {"base_color": col, "roughness": float(roughness)})
-    return _mix(scene, base, wear, mask, stochastic=True)
+    return _mix(scene, base, wear, mask, stochastic=bool(stochastic))
 
 
 def decal(scene: Scene, base: Base, image: Union[str, os.PathLike, np.ndarray], *, position: Sequence[float],

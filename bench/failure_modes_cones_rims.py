@@ -4,7 +4,7 @@ two failure modes measured by tests/python/test_failure_ray_cones.py and
 test_failure_catcher_rims.py, whose scenes it reuses), and prints the converged rim error of the
 catcher composite (the rim bias, which the 64-spp test cannot separate from noise).
 
-    PYTHONPATH=python .venv/bin/python bench/failure_images_b.py
+    PYTHONPATH=python .venv/bin/python bench/failure_modes_cones_rims.py
 """
 from __future__ import annotations
 
