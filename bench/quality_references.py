@@ -73,6 +73,16 @@ def render(name: str, scene: Any, spp: int, max_depth: int, seed: int, scale: fl
     return scene.render(spp=int(spp), max_depth=int(max_depth), seed=int(seed), **kw)
 
 
+def read_reference(name: str, ref_dir: str = REF_DIR) -> np.ndarray:
+    """The committed converged reference of regression scene ``name`` (H x W x 3 float32)."""
+    import OpenImageIO as oiio
+
+    path = os.path.join(ref_dir, f"{name}.exr")
+    if not os.path.exists(path):
+        raise FileNotFoundError(f"{path} is missing: run bench/quality_references.py --scenes {name}")
+    return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)[..., :3]
+
+
 def write_exr(path: str, rgb: np.ndarray, attrs: dict) -> None:
     import OpenImageIO as oiio
 

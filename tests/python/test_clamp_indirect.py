@@ -19,9 +19,9 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "bench"))
 
 
 def _reference(name):
-    import OpenImageIO as oiio
+    from quality_references import read_reference
 
-    return oiio.ImageBuf(os.path.join(HERE, "references", "quality", f"{name}.exr")).get_pixels(oiio.FLOAT)[..., :3]
+    return read_reference(name)
 
 
 @pytest.fixture(scope="module")

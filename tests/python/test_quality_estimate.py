@@ -23,12 +23,9 @@ SCENES = ("cbox", "materials", "sunlit", "default", "road_signs")
 
 
 def _reference(name):
-    import OpenImageIO as oiio
+    from quality_references import read_reference
 
-    path = os.path.join(REF_DIR, f"{name}.exr")
-    if not os.path.exists(path):
-        pytest.fail(f"{path} is missing: run bench/quality_references.py")
-    return oiio.ImageBuf(path).get_pixels(oiio.FLOAT)[..., :3]
+    return read_reference(name)
 
 
 _scenes = {}
