@@ -41,7 +41,7 @@ void bind_denoise(py::module_& m) {
          const py::object& albedo_odd, const py::object& normal_even, const py::object& normal_odd,
          const py::object& depth_even, const py::object& depth_odd, const py::object& variance, int radius,
          int patch_radius, float k, int feature_radius, int selection_radius, float albedo_floor, float ridge,
-         float firefly_ratio, bool second_pass) {
+         float firefly_ratio, bool second_pass, float distance_floor, float normal_weight) {
         FloatArray first = FloatArray::ensure(rgb_even);
         if (!first || first.ndim() != 3 || first.shape(2) != 3 || first.shape(0) == 0 || first.shape(1) == 0)
           throw Error("denoise: rgb_even must be a non-empty H x W x 3 float array");
@@ -76,6 +76,8 @@ void bind_denoise(py::module_& m) {
         s.ridge = ridge;
         s.firefly_ratio = firefly_ratio;
         s.second_pass = second_pass;
+        s.distance_floor = distance_floor;
+        s.normal_weight = normal_weight;
         py::array_t<float> out({h, w, py::ssize_t(3)});
         float* dst = out.mutable_data();
         {
@@ -89,7 +91,8 @@ void bind_denoise(py::module_& m) {
       py::arg("radius") = d.radius, py::arg("patch_radius") = d.patch_radius, py::arg("k") = d.k,
       py::arg("feature_radius") = d.feature_radius, py::arg("selection_radius") = d.selection_radius,
       py::arg("albedo_floor") = d.albedo_floor, py::arg("ridge") = d.ridge, py::arg("firefly_ratio") = d.firefly_ratio,
-      py::arg("second_pass") = d.second_pass,
+      py::arg("second_pass") = d.second_pass, py::arg("distance_floor") = d.distance_floor,
+      py::arg("normal_weight") = d.normal_weight,
       "Denoises a render from its two half-sample images (H x W x 3 float32 each) and its features\n"
       "(albedo and normal H x W x 3, depth H x W; each as two halves -- the same array twice when the\n"
       "render has only pixel-centre features); returns H x W x 3 float32 linear radiance.\n"
@@ -98,7 +101,8 @@ void bind_denoise(py::module_& m) {
       "by their error estimated from the halves, albedo demodulation. Optional `variance`: the\n"
       "variance of the mean (RenderResult.variance); without it the halves' difference is used.\n"
       "Settings: radius (window half-size), patch_radius, k, feature_radius (feature prefilter),\n"
-      "selection_radius, albedo_floor (0: no demodulation), ridge, firefly_ratio (0: off), second_pass.\n"
+      "selection_radius, albedo_floor (0: no demodulation), ridge, firefly_ratio (0: off), second_pass,\n"
+      "distance_floor (relative variance floor of the weights), normal_weight (bilateral normal term).\n"
       "Deterministic for any number of threads. Raises SynthgenError on bad shapes or settings.\n"
       "Use synthgen.post.denoise.denoise.");
 }

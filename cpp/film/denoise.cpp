@@ -46,6 +46,10 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   if (!(st.ridge >= 0.f) || !std::isfinite(st.ridge)) throw Error("denoise: ridge must be >= 0");
   if (!(st.firefly_ratio >= 0.f) || !std::isfinite(st.firefly_ratio))
     throw Error("denoise: firefly_ratio must be >= 0");
+  if (!(st.distance_floor >= 0.f) || !std::isfinite(st.distance_floor))
+    throw Error("denoise: distance_floor must be >= 0");
+  if (!(st.normal_weight >= 0.f) || !std::isfinite(st.normal_weight))
+    throw Error("denoise: normal_weight must be >= 0");
 
   const int W = int(in.width), H = int(in.height);
   const size_t n = size_t(W) * size_t(H);
@@ -322,7 +326,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
   // filtered (patches 3 x 3, k 1) guided by the mean image before the per-pixel blend.
   Planes mse_f, select, select_f;
   mse_f.allocate(6, W, H, pad);
-  nlmeans(mse, mean_rad, mean_var, 1, st.selection_radius, 1.f, mse_f);
+  nlmeans(mse, mean_rad, mean_var, 1, st.selection_radius, 1.f, mse_f, k_selection_floor);
   select.allocate(3, W, H, pad);
   for (int c = 0; c < 3; ++c)
     for_rows(0, H, [&](int y) {
@@ -333,7 +337,7 @@ void denoise(const DenoiseInput& in, const DenoiseSettings& st, float* out_rgb) 
     });
   select.fill_border();
   select_f.allocate(3, W, H, pad);
-  nlmeans(select, mean_rad, mean_var, 1, st.selection_radius, 1.f, select_f);
+  nlmeans(select, mean_rad, mean_var, 1, st.selection_radius, 1.f, select_f, k_selection_floor);
 
   // --- Blend the candidates, average the halves.
   Planes blended, blend_var;

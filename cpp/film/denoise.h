@@ -50,6 +50,14 @@ struct DenoiseSettings {
   float firefly_ratio = 2.f;
   /// NFOR's second pass: the averaged result filtered once more (about 1.5 x the cost).
   bool second_pass = false;
+  /// Relative variance floor of the regression weights' patch distance: floor * (u_p^2 +
+  /// u_q^2) is added to the halves' variances, so that differences below about
+  /// sqrt(2 floor) of the value weigh like noise (pixels next to noise-free ones -- sky,
+  /// emitters -- find neighbours); 0 disables.
+  float distance_floor = 1e-3f;
+  /// Bilateral normal term of the regression weights, exp(-normal_weight |n_q - n_p|^2);
+  /// 0 disables.
+  float normal_weight = 5.f;
 };
 
 /// Denoises a render from its two half-sample images and features into `out_rgb` (H x W x 3).

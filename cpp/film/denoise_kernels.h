@@ -39,6 +39,11 @@ constexpr float k_range_weight = 1e-2f;
 /// denoised / raw 64 spp relMSE 4.64 at 1, 1.22 at 0.25, 0.84 at 0.1, 0.66 at 0; the other
 /// regression scenes and every mean are unchanged to 0.01%.
 constexpr float k_spread_cap = 0.1f;
+/// Relative variance floor (patch_distances) of the NL-means filters of the error estimates and
+/// of the selection map. Measured on the five regression scenes (docs/denoise.md): with the
+/// regression's floor at 1e-3, 1e-3 / 3e-2 / 1e-1 here gave a geomean denoised / raw 64 spp
+/// relMSE of 1.984 / 1.959 / 1.957 (seeds 71-73); 3e-2 / 1e-1: 2.016 / 2.003 (seeds 74-76).
+constexpr float k_selection_floor = 3e-2f;
 /// Input radiance beyond this is clamped (keeps squared differences finite in float).
 constexpr float k_max_radiance = 1e9f;
 
@@ -142,8 +147,14 @@ struct DistanceScratch {
 /// (a separable box sum: the per-offset "shifted image" evaluation that shares each pixel's
 /// term among the patches covering it). Computed with k = 1; for bandwidth k the distance is
 /// this / k^2 (exact up to eps / k^2).
+/// `floor` (>= 0) adds floor * (u_p^2 + u_q^2) to the denominator: a relative variance floor.
+/// NOTE: not in Rousselle et al. or NFOR. Measured (docs/denoise.md): pixels the denoiser left
+/// unfiltered -- no neighbour's patch within the variance-scaled distance, e.g. the Cornell box
+/// light's corners, silhouettes against the noise-free sky -- held 48% (cbox) and 31% (sunlit)
+/// of the denoised error; a floor of 1e-3 (differences below ~4.5% of the value count as
+/// noise-level) lets them share with their nearest neighbours.
 void patch_distances(const Planes& g, const Planes& v, const TileRect& t, int ox, int oy, int F,
-                     DistanceScratch& s, float* out) {
+                     DistanceScratch& s, float* out, float floor = 0.f) {
   const int pw = t.w + 2 * F, ph = t.h + 2 * F;
   s.patch.resize(size_t(pw) * ph);
   s.rows.resize(size_t(t.w) * ph);
@@ -160,7 +171,7 @@ void patch_distances(const Planes& g, const Planes& v, const TileRect& t, int ox
       for (int x = 0; x < pw; ++x) {
         const float d = gp[x] - gq[x];
         const float num = d * d - (vp[x] + std::min(vp[x], vq[x]));
-        dst[x] += num / (k_dist_eps + vp[x] + vq[x]);
+        dst[x] += num / (k_dist_eps + vp[x] + vq[x] + floor * (gp[x] * gp[x] + gq[x] * gq[x]));
       }
     }
   }
@@ -205,8 +216,10 @@ void offset_weights(const float* dist, const TileRect& t, int ox, int oy, int wi
 }
 
 /// Zeroth-order NL-means: out = the weighted mean of `img` over a (2R+1)^2 window, weights from
-/// `g` (variance `v`), patches (2F+1)^2, bandwidth k. Writes out's interior (not its border).
-inline void nlmeans(const Planes& img, const Planes& g, const Planes& v, int F, int R, float k, Planes& out) {
+/// `g` (variance `v`, relative floor `floor`: patch_distances), patches (2F+1)^2, bandwidth k.
+/// Writes out's interior (not its border).
+inline void nlmeans(const Planes& img, const Planes& g, const Planes& v, int F, int R, float k, Planes& out,
+                    float floor = 0.f) {
   const int W = img.width, H = img.height, C = img.channels;
   const float inv_k2 = 1.f / (k * k);
   struct Scratch {
@@ -223,7 +236,7 @@ inline void nlmeans(const Planes& img, const Planes& g, const Planes& v, int F, 
     float* sum_w = s.acc.data() + size_t(C) * n;
     for (int oy = -R; oy <= R; ++oy) {
       for (int ox = -R; ox <= R; ++ox) {
-        patch_distances(g, v, t, ox, oy, F, s.d, s.dist.data());
+        patch_distances(g, v, t, ox, oy, F, s.d, s.dist.data(), floor);
         offset_weights(s.dist.data(), t, ox, oy, W, H, inv_k2, s.w.data());
         for (int y = 0; y < t.h; ++y) {
           const float* wr = s.w.data() + size_t(y) * t.w;
@@ -342,6 +355,15 @@ void regress(const Planes& img, const float* X, const Planes& g, const Planes& v
   const int W = g.width, H = g.height, R = st.radius, F = st.patch_radius;
   const int side = 2 * R + 1, n_off = side * side;
   const float inv_k2 = 1.f / (st.k * st.k);
+  // The normals (features 3-5) as planes, for the normal term of the weights.
+  Planes normals;
+  if (st.normal_weight > 0.f) {
+    normals.allocate(3, W, H, g.pad);
+    for (int c = 0; c < 3; ++c) {
+      float* o = normals.plane(c);
+      for (size_t i = 0; i < normals.plane_size; ++i) o[i] = X[i * k_dims + 3 + size_t(c)];
+    }
+  }
   std::vector<ptrdiff_t> shifts(n_off);
   for (int oy = -R; oy <= R; ++oy)
     for (int ox = -R; ox <= R; ++ox) shifts[size_t((oy + R) * side + ox + R)] = ptrdiff_t(oy) * g.stride + ox;
@@ -360,9 +382,29 @@ void regress(const Planes& img, const float* X, const Planes& g, const Planes& v
     s.w.resize(size_t(n_off) * n);
     for (int oy = -R; oy <= R; ++oy) {
       for (int ox = -R; ox <= R; ++ox) {
-        patch_distances(g, v, t, ox, oy, F, s.d, s.dist.data());
-        offset_weights(s.dist.data(), t, ox, oy, W, H, inv_k2,
-                       s.w.data() + size_t((oy + R) * side + ox + R) * n);
+        float* w = s.w.data() + size_t((oy + R) * side + ox + R) * n;
+        patch_distances(g, v, t, ox, oy, F, s.d, s.dist.data(), st.distance_floor);
+        if (st.normal_weight > 0.f) {
+          // NOTE: not in NFOR (its weights are the colour NL-means only): a bilateral normal
+          // term, as in edge-avoiding filters (e.g. Schied et al. 2017, SVGF): the weight times
+          // exp(-normal_weight |n_q - n_p|^2) on the regression's (sample-averaged) normals,
+          // added to the distance (scaled by k^2) so that one exp gives both. Measured:
+          // docs/denoise.md.
+          const ptrdiff_t shift = ptrdiff_t(oy) * g.stride + ox;
+          const float scale = st.normal_weight * st.k * st.k;
+          for (int y = 0; y < t.h; ++y) {
+            const size_t p0 = g.index(t.x0, t.y0 + y);
+            float* dr = s.dist.data() + size_t(y) * t.w;
+            const float* n0 = normals.plane(0) + p0;
+            const float* n1 = normals.plane(1) + p0;
+            const float* n2 = normals.plane(2) + p0;
+            for (int x = 0; x < t.w; ++x) {
+              const float d0 = n0[x + shift] - n0[x], d1 = n1[x + shift] - n1[x], d2 = n2[x + shift] - n2[x];
+              dr[x] = std::max(dr[x], 0.f) + scale * (d0 * d0 + d1 * d1 + d2 * d2);
+            }
+          }
+        }
+        offset_weights(s.dist.data(), t, ox, oy, W, H, inv_k2, w);
       }
     }
     for (int y = 0; y < t.h; ++y) {

@@ -5,6 +5,7 @@
 // finite, non-negative output.
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -217,6 +218,12 @@ TEST(Denoise, BadInputThrows) {
   EXPECT_THROW(sg::denoise(buf.input(), s, out.data()), sg::Error);
   s = {};
   s.k = -1.f;
+  EXPECT_THROW(sg::denoise(buf.input(), s, out.data()), sg::Error);
+  s = {};
+  s.distance_floor = -1e-3f;
+  EXPECT_THROW(sg::denoise(buf.input(), s, out.data()), sg::Error);
+  s = {};
+  s.normal_weight = std::numeric_limits<float>::infinity();
   EXPECT_THROW(sg::denoise(buf.input(), s, out.data()), sg::Error);
 }
 

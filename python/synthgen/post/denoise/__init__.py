@@ -30,6 +30,8 @@ SETTINGS = {
     "ridge": 1e-3,
     "firefly_ratio": 2.0,
     "second_pass": False,
+    "distance_floor": 1e-3,
+    "normal_weight": 5.0,
 }
 
 Feature = Union[np.ndarray, Sequence[np.ndarray]]
@@ -61,7 +63,8 @@ def denoise(rgb_even: np.ndarray, rgb_odd: np.ndarray, albedo: Feature, normal: 
     (even, odd). ``variance`` (optional, H x W x 3): the variance of the mean
     (``RenderResult.variance``); without it the noise is estimated from the halves.
     ``settings``: see :data:`SETTINGS` (radius, patch_radius, k, feature_radius,
-    selection_radius, albedo_floor, ridge, firefly_ratio, second_pass). Raises ValueError on bad shapes or settings."""
+    selection_radius, albedo_floor, ridge, firefly_ratio, second_pass, distance_floor,
+    normal_weight). Raises ValueError on bad shapes or settings."""
     unknown = sorted(set(settings) - set(SETTINGS))
     if unknown:
         raise ValueError(f"denoise: unknown setting(s) {unknown}; known: {sorted(SETTINGS)}")
