@@ -17,6 +17,7 @@ namespace sg::path_detail {
 // Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex:
 // (+0, +1) light position, (+2, +3) BSDF direction — the 2D-stratified pairs of
 // PixelSampler — then +4 light choice, +5 BSDF lobe (a pair too), +6 Russian roulette
+// (unstratified), +7 the free flight through a medium of the segment arriving at the vertex
 // (unstratified), (+8, +9) the dome light's direction, +10 the dome's choice (a pair with
 // the unused +11): the two light groups' samples (RenderScene::group_lights).
 constexpr uint32_t k_dims_per_vertex = 12;

@@ -132,6 +132,110 @@ class PathTracer {
     st.active = false;
   }
 
+  /// Transmittance of the global medium along a shadow ray (1 without one).
+  float transmittance(const Ray& r) const {
+    return m_scene.medium ? m_scene.medium->transmittance(r.o, r.d, r.t_max) : 1.f;
+  }
+
+  /// A free flight through the global medium along the current ray, up to `t_end` (its hit, or
+  /// inf): true and the event's ray parameter in *t when it scatters first. The estimator's
+  /// weight is the medium's albedo at an event and 1 when the flight passes (medium.h).
+  bool medium_event(const PathState& st, float t_end, const PixelSampler& sampler, float* t) const {
+    if (!m_scene.medium) return false;
+    const float u = sampler.get_independent(2 + st.bounce * k_dims_per_vertex + 7);
+    return m_scene.medium->sample_distance(st.ray.o, st.ray.d, t_end, u, t);
+  }
+
+  /// The current ray scattered in the medium at ray parameter t: next-event estimation with the
+  /// phase function (one light of each group, MIS with phase sampling; shadow rays through the
+  /// medium), then a new direction from the phase function. The same bookkeeping as on_hit.
+  uint32_t on_medium(PathState& st, float t, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow,
+                     RayLayer layer, bool track) const {
+    const RenderScene& sc = m_scene;
+    const Medium& medium = *sc.medium;
+    const Vec3f p = st.ray.o + st.ray.d * t;
+    const Vec3f wo = -normalize(st.ray.d);
+    st.beta *= medium.albedo();
+    st.path_length += t * length(st.ray.d);
+    st.cone_width += st.cone_spread * t;
+    if (!st.feature_final) {
+      st.feature_albedo = medium.albedo();
+      st.feature_normal = Vec3f(0.f);
+      st.feature_depth = st.path_length;
+      st.feature_final = true;
+    }
+    if (st.segments >= m_s.max_depth || is_black(st.beta)) {
+      st.active = false;
+      return 0;
+    }
+    const HenyeyGreenstein phase = medium.phase();
+    keys.update(st.bounce, sampler);
+    const Vec2f u_pick = sampler.get_2d_keyed(keys.pick_lobe);
+    uint32_t shadow_requested = 0;
+    if (!sc.lights.empty()) {
+      st.prev_p = p;
+      st.prev_n = Vec3f(0.f);
+      const LightSampleContext ctx{p, Vec3f(0.f), Vec3f(0.f)};
+      for (int g = 0; g < RenderScene::k_light_groups; ++g) {
+        st.prev_light_total[g] = 0.f;
+        if (sc.group_lights[g].empty()) continue;
+        const float u = g == 0 ? u_pick.x : sampler.get_2d_keyed(keys.dome_pick).x;
+        float pick_pmf;
+        size_t li = sc.pick_light(g, p, u, &pick_pmf, &st.prev_light_total[g]);
+        const Light* light = sc.lights[li];
+        if (layer == RayLayer::catchers && !sc.light_in_catcher_layer[li]) continue;
+        LightSample ls;
+        if (!light->sample(ctx, sampler.get_2d_keyed(g == 0 ? keys.light : keys.dome_light), &ls)) continue;
+        const float f = phase.eval(wo, ls.wi);
+        if (!(f > 0.f)) continue;
+        Ray& sh = shadow[g];
+        sh.o = p;
+        if (ls.infinite) {
+          sh.d = ls.wi;
+          sh.t_max = k_inf;
+        } else {
+          Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
+          sh.d = target - sh.o;
+          sh.t_max = 1.f - k_shadow_epsilon;
+        }
+        const float tr = transmittance(sh);
+        if (!(tr > 0.f)) continue;
+        const float light_pdf = pick_pmf * ls.pdf;
+        // NOTE: MIS weights from the directions' densities alone (light vs phase sampling); the
+        // free flight's probability of reaching the light (T) is left out of both, which keeps
+        // the weights a partition of unity (unbiased) -- pbrt-v4's volumetric path tracer also
+        // folds T into them (its r_u / r_l ratios), slightly better where the medium is thick.
+        const float w = ls.delta ? 1.f : power_heuristic(light_pdf, f);
+        st.shadow_contrib[g] = clamped(st.beta * ls.li * (f * w * tr / light_pdf), st.bounce);
+        shadow_requested |= 1u << g;
+        if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
+      }
+    }
+    float pdf;
+    const Vec3f wi = phase.sample(wo, sampler.get_2d_keyed(keys.bsdf), &pdf);
+    if (!(pdf > 0.f)) {
+      st.active = false;
+      return shadow_requested;
+    }
+    // The phase function is sampled exactly: its value over its pdf is 1.
+    st.prev_pdf = pdf;
+    st.prev_delta = false;
+    st.all_glossy = false;
+    st.cone_spread += k_pi / 8.f;  // as a diffuse bounce's widest spread (ray_cone.h)
+    ++st.segments;
+    ++st.bounce;
+    if (st.segments > m_s.rr_depth) {
+      float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
+      if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
+        st.active = false;
+        return shadow_requested;
+      }
+      st.beta *= 1.f / (1.f - q);
+    }
+    st.ray = Ray{p, wi, k_inf};
+    return shadow_requested;
+  }
+
   /// The current ray hit a surface: add emission, prepare the shadow rays of next-event
   /// estimation (one per light group: returns a bit mask of the groups whose `shadow[g]` it
   /// filled), and sample the next direction (or end the path by clearing `st.active`).
@@ -226,9 +330,11 @@ class PathTracer {
           sh.d = target - sh.o;
           sh.t_max = 1.f - k_shadow_epsilon;
         }
+        const float tr = transmittance(sh);
+        if (!(tr > 0.f)) continue;
         float light_pdf = pick_pmf * ls.pdf;
         float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);
-        st.shadow_contrib[g] = clamped(st.beta * f * ls.li * (w / light_pdf), st.bounce);
+        st.shadow_contrib[g] = clamped(st.beta * f * ls.li * (w * tr / light_pdf), st.bounce);
         shadow_requested |= 1u << g;
         if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
       }
@@ -312,12 +418,18 @@ class PathTracer {
       for (int i = 0; i < W; ++i) {
         for (int g = 0; g < G; ++g) shadow_packets[g].valid[i] = 0;
         if (!st[i].active) continue;
-        if (!hp.found[i]) {
+        Ray shadow[G];
+        uint32_t mask;
+        float t_event;
+        if (sc.medium && st[i].bounce == 0 && hp.found[i]) st[i].hit_geometry = true;  // alpha: geometry, not fog
+        if (medium_event(st[i], hp.found[i] ? hp.hit[i].t : k_inf, samplers[i], &t_event)) {
+          mask = on_medium(st[i], t_event, samplers[i], keys[samplers[i].half()], shadow, layer, track);
+        } else if (!hp.found[i]) {
           on_miss(st[i]);
           continue;
+        } else {
+          mask = on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
         }
-        Ray shadow[G];
-        const uint32_t mask = on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
         for (int g = 0; g < G; ++g)
           if (mask & (1u << g)) {
             shadow_packets[g].set(i, shadow[g]);
