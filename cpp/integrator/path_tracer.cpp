@@ -146,11 +146,73 @@ class PathTracer {
     return m_scene.medium->sample_distance(st.ray.o, st.ray.d, t_end, u, t);
   }
 
-  /// The current ray scattered in the medium at ray parameter t: next-event estimation with the
-  /// phase function (one light of each group, MIS with phase sampling; shadow rays through the
-  /// medium), then a new direction from the phase function. The same bookkeeping as on_hit.
-  uint32_t on_medium(PathState& st, float t, const PixelSampler& sampler, VertexKeys& keys, Ray* shadow,
-                     RayLayer layer, bool track) const {
+  /// Decoupled next-event estimation in the medium along the current segment [0, t_end): the
+  /// light scattered towards the path at a point drawn from the free-flight density conditioned
+  /// on scattering within the segment, one light of each group, weighted by the probability of
+  /// scattering at all (1 - T). Fills shadow[g] / st.shadow_contrib[k_light_groups + g]; returns
+  /// the mask of the groups it filled.
+  /// NOTE: the expectation equals next-event estimation at the vertex where the free flight
+  /// scatters (which then does none), but every segment gets an estimate instead of the
+  /// fraction 1 - T that scatters: far less noise in the single-scattered light (the "decoupled"
+  /// direct lighting of production renderers, e.g. Cycles' volume integrator, which samples the
+  /// direct-light point apart from the indirect scattering decision). MIS with phase sampling at
+  /// the same point is consistent because both use the light choice there (on_medium).
+  uint32_t medium_nee(PathState& st, float t_end, const PixelSampler& sampler, Ray* shadow, RayLayer layer,
+                      bool track) const {
+    const RenderScene& sc = m_scene;
+    if (!sc.medium || sc.lights.empty() || st.segments >= m_s.max_depth) return 0;
+    const uint32_t dim = k_medium_nee_dims + st.bounce * 8u;
+    float t, p_scatter;
+    if (!sc.medium->sample_in_segment(st.ray.o, st.ray.d, t_end, sampler.get_independent(dim), &t, &p_scatter))
+      return 0;
+    const Medium& medium = *sc.medium;
+    const Vec3f p = st.ray.o + st.ray.d * t;
+    const Vec3f wo = -normalize(st.ray.d);
+    const HenyeyGreenstein phase = medium.phase();
+    const Color beta = st.beta * medium.albedo() * p_scatter;
+    if (is_black(beta)) return 0;
+    const LightSampleContext ctx{p, Vec3f(0.f), Vec3f(0.f)};
+    uint32_t requested = 0;
+    for (int g = 0; g < RenderScene::k_light_groups; ++g) {
+      if (sc.group_lights[g].empty()) continue;
+      const uint32_t d = dim + 1u + 3u * uint32_t(g);
+      float pick_pmf;
+      size_t li = sc.pick_light(g, p, sampler.get_independent(d), &pick_pmf);
+      const Light* light = sc.lights[li];
+      if (layer == RayLayer::catchers && !sc.light_in_catcher_layer[li]) continue;
+      LightSample ls;
+      if (!light->sample(ctx, Vec2f(sampler.get_independent(d + 1), sampler.get_independent(d + 2)), &ls)) continue;
+      const float f = phase.eval(wo, ls.wi);
+      if (!(f > 0.f)) continue;
+      Ray& sh = shadow[g];
+      sh.o = p;
+      if (ls.infinite) {
+        sh.d = ls.wi;
+        sh.t_max = k_inf;
+      } else {
+        Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
+        sh.d = target - sh.o;
+        sh.t_max = 1.f - k_shadow_epsilon;
+      }
+      const float tr = transmittance(sh);
+      if (!(tr > 0.f)) continue;
+      const float light_pdf = pick_pmf * ls.pdf;
+      // NOTE: MIS weights from the directions' densities alone (light vs phase sampling); the
+      // free flight's probability of reaching the light (T) is left out of both, which keeps
+      // the weights a partition of unity (unbiased) -- pbrt-v4's volumetric path tracer also
+      // folds T into them (its r_u / r_l ratios), slightly better where the medium is thick.
+      const float w = ls.delta ? 1.f : power_heuristic(light_pdf, f);
+      st.shadow_contrib[RenderScene::k_light_groups + g] = clamped(beta * ls.li * (f * w * tr / light_pdf), st.bounce);
+      requested |= 1u << g;
+      if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
+    }
+    return requested;
+  }
+
+  /// The current ray scattered in the medium at ray parameter t: a new direction from the phase
+  /// function (the light the medium scatters along the segment was estimated by medium_nee). The
+  /// same bookkeeping as on_hit.
+  void on_medium(PathState& st, float t, const PixelSampler& sampler, VertexKeys& keys) const {
     const RenderScene& sc = m_scene;
     const Medium& medium = *sc.medium;
     const Vec3f p = st.ray.o + st.ray.d * t;
@@ -166,56 +228,25 @@ class PathTracer {
     }
     if (st.segments >= m_s.max_depth || is_black(st.beta)) {
       st.active = false;
-      return 0;
+      return;
     }
     const HenyeyGreenstein phase = medium.phase();
     keys.update(st.bounce, sampler);
-    const Vec2f u_pick = sampler.get_2d_keyed(keys.pick_lobe);
-    uint32_t shadow_requested = 0;
-    if (!sc.lights.empty()) {
-      st.prev_p = p;
-      st.prev_n = Vec3f(0.f);
-      const LightSampleContext ctx{p, Vec3f(0.f), Vec3f(0.f)};
-      for (int g = 0; g < RenderScene::k_light_groups; ++g) {
-        st.prev_light_total[g] = 0.f;
-        if (sc.group_lights[g].empty()) continue;
-        const float u = g == 0 ? u_pick.x : sampler.get_2d_keyed(keys.dome_pick).x;
-        float pick_pmf;
-        size_t li = sc.pick_light(g, p, u, &pick_pmf, &st.prev_light_total[g]);
-        const Light* light = sc.lights[li];
-        if (layer == RayLayer::catchers && !sc.light_in_catcher_layer[li]) continue;
-        LightSample ls;
-        if (!light->sample(ctx, sampler.get_2d_keyed(g == 0 ? keys.light : keys.dome_light), &ls)) continue;
-        const float f = phase.eval(wo, ls.wi);
-        if (!(f > 0.f)) continue;
-        Ray& sh = shadow[g];
-        sh.o = p;
-        if (ls.infinite) {
-          sh.d = ls.wi;
-          sh.t_max = k_inf;
-        } else {
-          Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
-          sh.d = target - sh.o;
-          sh.t_max = 1.f - k_shadow_epsilon;
-        }
-        const float tr = transmittance(sh);
-        if (!(tr > 0.f)) continue;
-        const float light_pdf = pick_pmf * ls.pdf;
-        // NOTE: MIS weights from the directions' densities alone (light vs phase sampling); the
-        // free flight's probability of reaching the light (T) is left out of both, which keeps
-        // the weights a partition of unity (unbiased) -- pbrt-v4's volumetric path tracer also
-        // folds T into them (its r_u / r_l ratios), slightly better where the medium is thick.
-        const float w = ls.delta ? 1.f : power_heuristic(light_pdf, f);
-        st.shadow_contrib[g] = clamped(st.beta * ls.li * (f * w * tr / light_pdf), st.bounce);
-        shadow_requested |= 1u << g;
-        if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
-      }
+    // Light was sampled for this segment by medium_nee (decoupled); what a phase-sampled
+    // direction finds is weighed against it with the light choice at this point.
+    st.prev_p = p;
+    st.prev_n = Vec3f(0.f);
+    for (int g = 0; g < RenderScene::k_light_groups; ++g) {
+      st.prev_light_total[g] = 0.f;
+      if (sc.group_lights[g].empty()) continue;
+      float pmf;
+      sc.pick_light(g, p, 0.5f, &pmf, &st.prev_light_total[g]);
     }
     float pdf;
     const Vec3f wi = phase.sample(wo, sampler.get_2d_keyed(keys.bsdf), &pdf);
     if (!(pdf > 0.f)) {
       st.active = false;
-      return shadow_requested;
+      return;
     }
     // The phase function is sampled exactly: its value over its pdf is 1.
     st.prev_pdf = pdf;
@@ -228,12 +259,11 @@ class PathTracer {
       float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
       if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
         st.active = false;
-        return shadow_requested;
+        return;
       }
       st.beta *= 1.f / (1.f - q);
     }
     st.ray = Ray{p, wi, k_inf};
-    return shadow_requested;
   }
 
   /// The current ray hit a surface: add emission, prepare the shadow rays of next-event
@@ -412,31 +442,38 @@ class PathTracer {
       HitPacket hp;
       sc.accel->intersect_packet(rays, &hp, layer);
       counters.rays += n_active;
-      constexpr int G = RenderScene::k_light_groups;
-      RayPacket shadow_packets[G];
-      uint32_t n_shadow[G] = {0, 0};
+      constexpr int G = RenderScene::k_light_groups, S = k_shadow_slots;
+      RayPacket shadow_packets[S];
+      uint32_t n_shadow[S] = {};
       for (int i = 0; i < W; ++i) {
-        for (int g = 0; g < G; ++g) shadow_packets[g].valid[i] = 0;
+        for (int g = 0; g < S; ++g) shadow_packets[g].valid[i] = 0;
         if (!st[i].active) continue;
-        Ray shadow[G];
-        uint32_t mask;
-        float t_event;
-        if (sc.medium && st[i].bounce == 0 && hp.found[i]) st[i].hit_geometry = true;  // alpha: geometry, not fog
-        if (medium_event(st[i], hp.found[i] ? hp.hit[i].t : k_inf, samplers[i], &t_event)) {
-          mask = on_medium(st[i], t_event, samplers[i], keys[samplers[i].half()], shadow, layer, track);
+        Ray shadow[S];
+        uint32_t mask = 0;
+        if (sc.medium) {
+          const float t_end = hp.found[i] ? hp.hit[i].t : k_inf;
+          if (st[i].bounce == 0 && hp.found[i]) st[i].hit_geometry = true;  // alpha: geometry, not fog
+          mask |= medium_nee(st[i], t_end, samplers[i], shadow + G, layer, track) << G;
+          float t_event;
+          if (medium_event(st[i], t_end, samplers[i], &t_event)) {
+            on_medium(st[i], t_event, samplers[i], keys[samplers[i].half()]);
+          } else if (!hp.found[i]) {
+            on_miss(st[i]);
+          } else {
+            mask |= on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
+          }
         } else if (!hp.found[i]) {
           on_miss(st[i]);
-          continue;
         } else {
           mask = on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
         }
-        for (int g = 0; g < G; ++g)
+        for (int g = 0; g < S; ++g)
           if (mask & (1u << g)) {
             shadow_packets[g].set(i, shadow[g]);
             ++n_shadow[g];
           }
       }
-      for (int g = 0; g < G; ++g) {
+      for (int g = 0; g < S; ++g) {
         if (!n_shadow[g]) continue;
         const RayPacket& shadows = shadow_packets[g];
         bool occluded[W];

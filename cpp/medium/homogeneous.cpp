@@ -48,6 +48,21 @@ class HomogeneousLayer final : public Medium {
     return true;
   }
 
+  bool sample_in_segment(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t,
+                         float* p_scatter) const override {
+    float t0, t1;
+    if (!(m_sigma_t > 0.f) || !inside(o, d, t_max, &t0, &t1)) return false;
+    const float len = length(d);
+    // NOTE: inverting the exponential truncated to the segment's length L inside the layer:
+    // s = -ln(1 - u (1 - exp(-sigma L))) / sigma; -expm1 keeps 1 - exp accurate for thin media.
+    const float p = std::isfinite(t1) ? -std::expm1(-m_sigma_t * (t1 - t0) * len) : 1.f;
+    if (!(p > 0.f)) return false;
+    const float s = -std::log1p(-std::min(u, 0x1.fffffep-1f) * p) / m_sigma_t;
+    *t = std::isfinite(t1) ? std::min(t0 + s / len, t1) : t0 + s / len;
+    *p_scatter = p;
+    return true;
+  }
+
   Color albedo() const override { return m_albedo; }
   HenyeyGreenstein phase() const override { return HenyeyGreenstein{m_g}; }
 

@@ -67,6 +67,12 @@ class Medium {
   /// false when the flight reaches t_max (probability T(t_max)). Either way the estimator's
   /// weight is what weight_scatter() / 1 says: the ratios of contribution to probability.
   virtual bool sample_distance(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t) const = 0;
+  /// Samples a scattering point along [0, t_max) with u in [0, 1) from the free-flight density
+  /// conditioned on scattering before t_max: returns false when the segment does not cross the
+  /// medium, else *t and *p_scatter = 1 - T(t_max), the probability of scattering at all (the
+  /// estimator's weight besides the albedo). For decoupled next-event estimation.
+  virtual bool sample_in_segment(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t,
+                                 float* p_scatter) const = 0;
   /// sigma_s / sigma_t: the throughput's factor at a scattering event.
   virtual Color albedo() const = 0;
   /// The phase function at scattering events.

@@ -180,3 +180,36 @@ TEST(homogeneous, visibility_is_koschmieder_and_bad_parameters_are_errors) {
     EXPECT_NE(std::string(e.what()).find("bottom"), std::string::npos) << e.what();
   }
 }
+
+TEST(homogeneous, points_in_a_segment_chi2_and_scatter_probability) {
+  // The free-flight density conditioned on scattering within the segment (decoupled next-event
+  // estimation): truncated exponential over the 24 m inside the layer; p_scatter = 1 - T.
+  const double sigma = 0.08;
+  auto fog = make_fog(sigma, 10.0, -2.0);
+  const Vec3f o(0, 12, 0), d = normalize(Vec3f(std::sqrt(3.f), -1.f, 0.f));
+  const double t0 = 4.0, t1 = 28.0, p = 1.0 - std::exp(-sigma * (t1 - t0));
+  const int n = 400000, bins = 48;
+  Pcg32 rng(1204);
+  std::vector<double> obs(bins, 0.0);
+  for (int i = 0; i < n; ++i) {
+    float t, ps;
+    ASSERT_TRUE(fog->sample_in_segment(o, d, 30.f, rng.next_float(), &t, &ps));
+    ASSERT_NEAR(ps, p, 1e-5);
+    ASSERT_GE(t, t0 - 1e-4);
+    ASSERT_LE(t, t1 + 1e-4);
+    obs[std::min(bins - 1, int((t - t0) / (t1 - t0) * bins))] += 1.0;
+  }
+  std::vector<double> exp(bins);
+  for (int b = 0; b < bins; ++b) {
+    double a = (t1 - t0) * b / bins, c = (t1 - t0) * (b + 1) / bins;
+    exp[b] = n * (std::exp(-sigma * a) - std::exp(-sigma * c)) / p;
+  }
+  Chi2Result r = chi2_test(obs, exp);
+  EXPECT_TRUE(r.ok) << r.message;
+  // A segment above the layer crosses no medium; an infinite one inside scatters for sure.
+  float t, ps;
+  EXPECT_FALSE(fog->sample_in_segment({0, 11, 0}, {1, 0, 0}, k_inf, 0.5f, &t, &ps));
+  ASSERT_TRUE(fog->sample_in_segment({0, 1, 0}, {1, 0, 0}, k_inf, 0.5f, &t, &ps));
+  EXPECT_EQ(ps, 1.f);
+  EXPECT_NEAR(t, std::log(2.0) / sigma, 1e-3);
+}
