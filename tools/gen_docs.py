@@ -46,6 +46,7 @@ CPP_FOLDERS = {
     "texture": "the Texture interface, one file per texture plugin; mip maps, the image cache",
     "light": "the Light interface, one file per light plugin; area lights (from emissive materials)",
     "camera": "PinholeCamera (OpenCV convention) and its plugin declaration (`pinhole.cpp`)",
+    "medium": "the Medium interface and Henyey-Greenstein phase function, one file per medium plugin (fog, haze)",
     "integrator": "the committed render scene, interactions, ray cones, the path tracer and its settings",
     "film": "radiance and label buffers, render statistics; the denoiser (`denoise.cpp`)",
     "io": "each third-party API in one file: OpenImageIO (a lazily loaded plugin), assimp",
@@ -61,7 +62,7 @@ OTHER_FOLDERS = {
     "tests/cpp, tests/python": "GoogleTest and pytest suites",
     "bench/": "scripts that print benchmark figures (never timed tests)",
     "docs/": "`architecture.md` (design, plugins, how to add things), `python_api.md`, `scene_file.md`, "
-             "`scenarios.md`, `augmented_photos.md`, `wear.md`, `vehicles.md`, `quality.md`, `denoise.md`, `benchmarks.md`, `failure_modes.md`",
+             "`scenarios.md`, `augmented_photos.md`, `wear.md`, `vehicles.md`, `quality.md`, `denoise.md`, `benchmarks.md`, `failure_modes.md`, `weather.md`",
     "assets_manifest/": "which assets exist, where they come from, licences, checksums",
     "fuzz/": "libFuzzer targets of every loader, their seed and regression corpora (`corpus/`), the YAML "
              "mutation fuzzer (`fuzz_yaml.py`); `bench/fuzz.sh` runs them",

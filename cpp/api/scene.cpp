@@ -369,6 +369,17 @@ void Scene::remove_light(uint32_t id) {
   m_structure_dirty = true;
 }
 
+void Scene::set_medium(const std::string& type, const ParamSet& params) {
+  auto m = create_medium(type, params, "medium");
+  m_medium = MediumEntry{type, params, m};
+  m_structure_dirty = true;
+}
+
+void Scene::clear_medium() {
+  m_medium.reset();
+  m_structure_dirty = true;
+}
+
 void Scene::set_camera(const PinholeCamera& camera) {
   camera.validate();
   m_camera = camera;
@@ -458,6 +469,9 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   if (!m_camera_set) throw Error("render: no camera has been set");
   settings.validate();
   if (has_pending_edits()) commit();
+  if (m_render_scene.medium && m_render_scene.has_catchers && !settings.labels_only)
+    throw Error("render: a medium (" + m_medium->type + ") with shadow catchers is not supported: a photo "
+                "background has no fog of its own to match (fog on photos is applied from the photo's depth)");
   m_render_scene.camera = m_camera;
   uint64_t alpha_calls_before = m_accel->alpha_test_calls();
   render_path_traced(m_render_scene, settings, film);

@@ -24,6 +24,7 @@
 #include "integrator/path_tracer.h"
 #include "integrator/render_scene.h"
 #include "light/light.h"
+#include "medium/medium.h"
 #include "material/material.h"
 #include "texture/image_cache.h"
 #include "texture/texture.h"
@@ -128,6 +129,14 @@ class Scene {
   void remove_texture(uint32_t id);
   void remove_material(uint32_t id);
 
+  // Medium ---------------------------------------------------------------------------
+  /// The scene's global participating medium (fog, haze: medium/medium.h), replacing any;
+  /// clear_medium() removes it. Labels never see it (they are the camera ray's first hit).
+  void set_medium(const std::string& type, const ParamSet& params);
+  void clear_medium();
+  struct MediumEntry { std::string type; ParamSet params; std::shared_ptr<Medium> object; };
+  const std::optional<MediumEntry>& medium() const { return m_medium; }
+
   // Camera ---------------------------------------------------------------------------
   void set_camera(const PinholeCamera& camera);
   const PinholeCamera& camera() const { return m_camera; }
@@ -207,6 +216,7 @@ class Scene {
   std::vector<std::optional<MaterialEntry>> m_materials;
   std::vector<std::optional<InstanceEntry>> m_instances;
   std::vector<std::optional<LightEntry>> m_lights;
+  std::optional<MediumEntry> m_medium;
   std::vector<uint32_t> m_removed_instances;
   /// Per instance slot with a material map: its triangles' materials (resolved at commit).
   std::vector<std::vector<const Material*>> m_instance_triangle_materials;

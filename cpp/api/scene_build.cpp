@@ -167,6 +167,7 @@ void Scene::build_render_scene() {
       rs.light_in_catcher_layer.push_back(1);
     }
   }
+  rs.medium = m_medium ? m_medium->object.get() : nullptr;
   rs.has_hittable_emitters = !m_area_lights.empty() || !rs.infinite_lights.empty() || !rs.reflection_lights.empty();
   rs.light_group.clear();
   std::vector<float> power[RenderScene::k_light_groups];

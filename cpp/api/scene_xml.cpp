@@ -190,6 +190,11 @@ void Scene::save(const std::string& path) const {
     n.append_attribute("type") = m_lights[i]->type.c_str();
     write_params(n, m_lights[i]->params);
   }
+  if (m_medium) {
+    pugi::xml_node n = root.append_child("medium");
+    n.append_attribute("type") = m_medium->type.c_str();
+    write_params(n, m_medium->params);
+  }
   if (m_camera_set) {
     pugi::xml_node n = root.append_child("camera");
     float k[4] = {m_camera.fx, m_camera.fy, m_camera.cx, m_camera.cy};
@@ -319,6 +324,7 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
       pad(s.m_lights, n.attribute("id").as_ullong());
       s.add_light(n.attribute("type").as_string(), read_params(n));
     }
+    if (pugi::xml_node n = root.child("medium")) s.set_medium(n.attribute("type").as_string(), read_params(n));
     if (pugi::xml_node n = root.child("camera")) {
       auto k = parse_floats(n.attribute("intrinsics").as_string(), 4, "camera");
       auto t = parse_floats(n.attribute("world_from_camera").as_string(), 16, "camera");

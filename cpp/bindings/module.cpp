@@ -420,6 +420,18 @@ a BVH build). render() commits pending edits first.)doc")
       .def("instance_count", &Scene::instance_count)
       .def("texture_count", &Scene::texture_count, "Live (not removed) textures.")
       .def("material_count", &Scene::material_count, "Live (not removed) materials.")
+      .def("set_medium",
+           [](Scene& s, const std::string& type, const py::dict& params) {
+             s.set_medium(type, params_from_dict(params, "medium '" + type + "'"));
+           },
+           py::arg("type"), py::arg("params") = py::dict(),
+           "Fills the scene with a participating medium (fog, haze: medium plugins), replacing any.")
+      .def("clear_medium", &Scene::clear_medium, "Removes the scene's medium.")
+      .def("medium_type",
+           [](const Scene& s) -> py::object {
+             return s.medium() ? py::object(py::str(s.medium()->type)) : py::object(py::none());
+           },
+           "The type of the scene's medium, or None.")
       .def("add_light",
            [](Scene& s, const std::string& type, const py::dict& params) {
              return s.add_light(type, params_from_dict(params, "light '" + type + "'"));

@@ -17,9 +17,18 @@ namespace sg::path_detail {
 // Sample dimensions: 0-1 pixel position, then a block of k_dims_per_vertex per path vertex:
 // (+0, +1) light position, (+2, +3) BSDF direction — the 2D-stratified pairs of
 // PixelSampler — then +4 light choice, +5 BSDF lobe (a pair too), +6 Russian roulette
+// (unstratified), +7 the free flight through a medium of the segment arriving at the vertex
 // (unstratified), (+8, +9) the dome light's direction, +10 the dome's choice (a pair with
 // the unused +11): the two light groups' samples (RenderScene::group_lights).
 constexpr uint32_t k_dims_per_vertex = 12;
+
+/// Shadow rays a path vertex may request at once: one per light group at a surface or medium
+/// vertex, one per light group for the medium along the segment that reached it.
+constexpr int k_shadow_slots = 2 * RenderScene::k_light_groups;
+
+/// First sample dimension (unstratified) of decoupled next-event estimation in a medium, per
+/// vertex: +0 the point, then per light group +1 the choice and +2, +3 the light sample.
+constexpr uint32_t k_medium_nee_dims = 0x30000u;
 
 struct PathCounters {
   uint64_t rays = 0;
@@ -32,8 +41,10 @@ struct PathCounters {
 struct PathState {
   Ray ray;
   Color L{0.f}, beta{1.f};
-  /// NEE contributions of the light groups, each added if its shadow ray is unoccluded.
-  Color shadow_contrib[RenderScene::k_light_groups];
+  /// NEE contributions, each added if its shadow ray is unoccluded: per light group at the
+  /// vertex (slots 0 .. k_light_groups - 1), then per light group at the point the medium
+  /// scatters along the segment (decoupled next-event estimation, PathTracer::medium_nee).
+  Color shadow_contrib[k_shadow_slots];
   float prev_pdf = 0.f;
   /// Where the previous vertex chose its lights, each group's light weights' sum there
   /// (RenderScene::pick_light) and the normal lights sampled by (LightSampleContext::n): the

@@ -12,6 +12,7 @@
 #include "geometry/mesh.h"
 #include "light/light.h"
 #include "material/material.h"
+#include "medium/medium.h"
 
 namespace sg {
 
@@ -77,6 +78,9 @@ struct RenderScene {
   std::vector<const Light*> reflection_lights;
   PinholeCamera camera;
   Bounds3 bounds;
+  /// The global participating medium (fog, haze), or null: every ray segment and shadow ray
+  /// travels through it (path_tracer.cpp); labels do not.
+  const Medium* medium = nullptr;
   /// False when no ray can pick up emission by hitting something (no emissive surfaces,
   /// no infinite lights): paths then end right after their last light sample.
   bool has_hittable_emitters = false;

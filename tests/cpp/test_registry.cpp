@@ -30,6 +30,7 @@ const std::map<std::string, std::string> k_not_plugins = {
     {"texture/mipmap.cpp", "mip-map pyramids and filtered lookups"},
     {"light/light.cpp", "the Light interface and create_light"},
     {"light/area.cpp", "area lights are made by the scene from emissive materials"},
+    {"medium/medium.cpp", "the Medium interface and create_medium"},
     {"camera/camera.cpp", "PinholeCamera itself; its plugin declaration is camera/pinhole.cpp"},
 };
 
@@ -47,7 +48,7 @@ std::string error_of(const std::function<void()>& f) {
 TEST(registry, every_plugin_file_is_registered_under_its_name) {
   const Registry& r = Registry::instance();
   const std::map<std::string, std::string> folders = {
-      {"material", "material"}, {"texture", "texture"}, {"light", "light"}, {"camera", "camera"}};
+      {"material", "material"}, {"texture", "texture"}, {"light", "light"}, {"camera", "camera"}, {"medium", "medium"}};
   for (const auto& [kind, folder] : folders) {
     std::set<std::string> files;
     for (const auto& entry : fs::directory_iterator(k_cpp / folder)) {
@@ -65,7 +66,7 @@ TEST(registry, every_plugin_file_is_registered_under_its_name) {
   }
   // The render settings are declared by the path tracer.
   EXPECT_EQ(r.info("render", "path_tracer").file, "cpp/integrator/path_tracer.cpp");
-  EXPECT_EQ(r.kinds(), (std::vector<std::string>{"camera", "light", "material", "render", "texture"}));
+  EXPECT_EQ(r.kinds(), (std::vector<std::string>{"camera", "light", "material", "medium", "render", "texture"}));
 }
 
 TEST(registry, declarations_are_consistent) {

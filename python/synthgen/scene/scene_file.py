@@ -83,6 +83,8 @@ TEXTURE = plugin_record("texture", doc="texture")
 MATERIAL = plugin_record("material", doc="material")
 LIGHT = plugin_record("light", fields={"name": String(None, doc="free name, reported in meta.json")},
                       doc="light (area lights come from emissive materials)")
+MEDIUM = plugin_record("medium", default=None, doc="the participating medium filling the scene (fog, haze; "
+                                                    "docs/weather.md)")
 RENDER = settings_record("render", "path_tracer", default=EMPTY, doc="render settings (keyword arguments of "
                                                                     "Scene.render)")
 
@@ -160,6 +162,7 @@ SCENE_SCHEMA = Record({
     "materials": MapOf(MATERIAL, {}, doc="named materials"),
     "objects": ListOf(OBJECT, min_items=1, doc="instances of meshes and primitives"),
     "lights": ListOf(LIGHT, [], doc="lights"),
+    "medium": MEDIUM,
     "render": RENDER,
 }, doc="a synthgen scene")
 
@@ -352,6 +355,11 @@ def build_validated(spec: Validated, ctx: ValidationContext) -> Tuple[Scene, Dic
         with ctx.core(light.loc):
             lid = scene.add_light(light["type"], given_params(light))
         meta["lights"].append({"name": light.get("name"), "type": light["type"], "id": lid})
+
+    if spec.get("medium") is not None:
+        with ctx.core(spec["medium"].loc):
+            scene.set_medium(spec["medium"]["type"], given_params(spec["medium"]))
+        meta["medium"] = {"type": spec["medium"]["type"], **given_params(spec["medium"])}
 
     scene.set_camera(camera_from_spec(spec["camera"], ctx))
     settings = {k: spec["render"][k] for k in RENDER.fields}

@@ -211,7 +211,7 @@ def _params_record(info: Mapping[str, Any], scenario: bool, keys: Optional[Seque
 
 
 def plugin_record(kind: str, *, scenario: bool = False, names: Optional[Iterable[str]] = None,
-                  fields: Optional[Mapping[str, Field]] = None, doc: str = "") -> Record:
+                  fields: Optional[Mapping[str, Field]] = None, doc: str = "", default: Any = REQUIRED) -> Record:
     """A record ``{type: NAME, ...parameters of plugin NAME}`` over the plugins of ``kind``
     (all, or ``names``), plus the extra ``fields`` common to every variant (e.g. a
     light's ``name``)."""
@@ -220,7 +220,7 @@ def plugin_record(kind: str, *, scenario: bool = False, names: Optional[Iterable
     variants = {i["name"]: _params_record(i, scenario) for i in infos}
     base = {"type": Choice([i["name"] for i in infos], doc=f"{kind} plugin")}
     base.update(fields or {})
-    return Record(base, tag="type", variants=variants, doc=doc or kind)
+    return Record(base, tag="type", variants=variants, doc=doc or kind, default=default)
 
 
 def settings_record(kind: str, name: str, *, scenario: bool = False, keys: Optional[Sequence[str]] = None,
