@@ -375,6 +375,24 @@ void Scene::set_medium(const std::string& type, const ParamSet& params) {
   m_structure_dirty = true;
 }
 
+std::vector<float> Scene::camera_transmittance(const std::vector<float>& distance) const {
+  if (!m_camera_set) throw Error("camera_transmittance: no camera has been set");
+  const uint32_t w = m_camera.width, h = m_camera.height;
+  if (distance.size() != size_t(w) * h)
+    throw Error("camera_transmittance: distance has " + std::to_string(distance.size()) + " values, the camera " +
+                std::to_string(size_t(w) * h) + " pixels");
+  std::vector<float> out(distance.size(), 1.f);
+  if (!m_medium) return out;
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      const Ray r = m_camera.generate_ray(float(x) + 0.5f, float(y) + 0.5f);
+      const float d = distance[i];
+      out[i] = m_medium->object->transmittance(r.o, r.d, std::isfinite(d) && d >= 0.f ? d : k_inf);
+    }
+  return out;
+}
+
 void Scene::clear_medium() {
   m_medium.reset();
   m_structure_dirty = true;

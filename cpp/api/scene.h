@@ -136,6 +136,10 @@ class Scene {
   void clear_medium();
   struct MediumEntry { std::string type; ParamSet params; std::shared_ptr<Medium> object; };
   const std::optional<MediumEntry>& medium() const { return m_medium; }
+  /// Per pixel (row-major, the camera's size), the medium's transmittance along the ray through
+  /// the pixel centre up to `distance` (the render's distance label; inf: the whole ray). All 1
+  /// without a medium. For labels: how much of an object the fog lets through.
+  std::vector<float> camera_transmittance(const std::vector<float>& distance) const;
 
   // Camera ---------------------------------------------------------------------------
   void set_camera(const PinholeCamera& camera);

@@ -427,6 +427,19 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("type"), py::arg("params") = py::dict(),
            "Fills the scene with a participating medium (fog, haze: medium plugins), replacing any.")
       .def("clear_medium", &Scene::clear_medium, "Removes the scene's medium.")
+      .def("camera_transmittance",
+           [](const Scene& s, const py::object& distance) {
+             auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(distance);
+             if (!a || a.ndim() != 2) throw Error("camera_transmittance: distance must be an H x W array");
+             std::vector<float> d(a.data(), a.data() + a.size());
+             std::vector<float> t = s.camera_transmittance(d);
+             py::array_t<float> out({a.shape(0), a.shape(1)});
+             std::copy(t.begin(), t.end(), out.mutable_data());
+             return out;
+           },
+           py::arg("distance"),
+           "Per pixel, the medium's transmittance along the pixel-centre camera ray up to `distance`\n"
+           "(RenderResult.distance; inf: the whole ray); all 1 without a medium.")
       .def("medium_type",
            [](const Scene& s) -> py::object {
              return s.medium() ? py::object(py::str(s.medium()->type)) : py::object(py::none());
@@ -467,7 +480,8 @@ a BVH build). render() commits pending edits first.)doc")
       .def("render",
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
               uint32_t tile_size, bool texture_filtering, float exposure, float clamp_indirect, float noise_threshold,
-              float target_psnr, uint32_t min_spp, uint32_t max_spp, bool denoise, bool labels_only) {
+              float target_psnr, uint32_t min_spp, uint32_t max_spp, bool denoise, uint32_t max_medium_depth,
+              bool labels_only) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -483,6 +497,7 @@ a BVH build). render() commits pending edits first.)doc")
              rs.min_spp = min_spp;
              rs.max_spp = max_spp;
              rs.denoise = denoise;
+             rs.max_medium_depth = max_medium_depth;
              rs.labels_only = labels_only;
              auto film = std::make_shared<Film>();
              {
@@ -502,7 +517,8 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("target_psnr") = render_default<float>("target_psnr"),
            py::arg("min_spp") = render_default<uint32_t>("min_spp"),
            py::arg("max_spp") = render_default<uint32_t>("max_spp"),
-           py::arg("denoise") = render_default<bool>("denoise"), py::arg("labels_only") = false,
+           py::arg("denoise") = render_default<bool>("denoise"),
+           py::arg("max_medium_depth") = render_default<uint32_t>("max_medium_depth"), py::arg("labels_only") = false,
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
            "centre ray's coverage).")

@@ -52,6 +52,7 @@ struct PathState {
   Vec3f prev_p{0.f}, prev_n{0.f};
   float prev_light_total[RenderScene::k_light_groups] = {0.f, 0.f};
   uint32_t segments = 1;  ///< ray segments so far (the camera ray is segment 1)
+  uint32_t medium_bounces = 0;  ///< scattering events in a medium so far (RenderSettings::max_medium_depth)
   uint32_t bounce = 0;
   bool prev_delta = true;  ///< the camera "sampled" the first direction
   /// Every bounce so far was a glossy or specular lobe: the camera sees a reflection (of a

@@ -31,6 +31,9 @@ PluginInfo render_info() {
       .add(param::integer("spp", 16, "samples per pixel").in(1, 1 << 20))
       .add(param::integer("max_depth", 8, "maximum ray segments from the camera (1: emitters only)").in(1, 1024))
       .add(param::integer("rr_depth", 5, "path length at which Russian roulette starts").in(0, 1024))
+      .add(param::integer("max_medium_depth", 64, "scattering events in a medium (fog, haze) a path may have "
+                                                  "besides its max_depth segments: multiple scattering in thick "
+                                                  "fog needs many; 0: single scattering").in(0, 4096))
       .add(param::integer("seed", 0, "random seed (images are deterministic per seed)").in(0, 18446744073709551615.0))
       .add(param::integer("threads", 0, "worker threads (0: all cores)").in(0, 4096))
       .add(param::integer("tile_size", 16, "tile edge in pixels").in(1, 4096))
@@ -57,6 +60,7 @@ std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const Pl
   rs->spp = uint32_t(p.get_int("spp"));
   rs->max_depth = uint32_t(p.get_int("max_depth"));
   rs->rr_depth = uint32_t(p.get_int("rr_depth"));
+  rs->max_medium_depth = uint32_t(p.get_int("max_medium_depth"));
   rs->seed = uint64_t(p.get_int("seed"));
   rs->threads = uint32_t(p.get_int("threads"));
   rs->tile_size = uint32_t(p.get_int("tile_size"));
@@ -160,7 +164,7 @@ class PathTracer {
   uint32_t medium_nee(PathState& st, float t_end, const PixelSampler& sampler, Ray* shadow, RayLayer layer,
                       bool track) const {
     const RenderScene& sc = m_scene;
-    if (!sc.medium || sc.lights.empty() || st.segments >= m_s.max_depth) return 0;
+    if (!sc.medium || sc.lights.empty() || st.medium_bounces >= m_s.max_medium_depth) return 0;
     const uint32_t dim = k_medium_nee_dims + st.bounce * 8u;
     float t, p_scatter;
     if (!sc.medium->sample_in_segment(st.ray.o, st.ray.d, t_end, sampler.get_independent(dim), &t, &p_scatter))
@@ -226,7 +230,10 @@ class PathTracer {
       st.feature_depth = st.path_length;
       st.feature_final = true;
     }
-    if (st.segments >= m_s.max_depth || is_black(st.beta)) {
+    // NOTE: scattering events count apart from max_depth (Cycles' volume bounces, pbrt's
+    // maxDepth counts both): multiple scattering in thick fog takes many, and cutting them off at
+    // a surface budget darkens fog that is bright in reality (light diffuses through the layer).
+    if (st.medium_bounces >= m_s.max_medium_depth || is_black(st.beta)) {
       st.active = false;
       return;
     }
@@ -253,9 +260,9 @@ class PathTracer {
     st.prev_delta = false;
     st.all_glossy = false;
     st.cone_spread += k_pi / 8.f;  // as a diffuse bounce's widest spread (ray_cone.h)
-    ++st.segments;
+    ++st.medium_bounces;
     ++st.bounce;
-    if (st.segments > m_s.rr_depth) {
+    if (st.segments + st.medium_bounces > m_s.rr_depth) {
       float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
       if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
         st.active = false;
@@ -390,7 +397,7 @@ class PathTracer {
       return shadow_requested;
     }
     // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
-    if (st.segments > m_s.rr_depth) {
+    if (st.segments + st.medium_bounces > m_s.rr_depth) {
       float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
       if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
         st.active = false;

@@ -232,3 +232,15 @@ def test_a_photos_hdr_is_turned_so_its_sun_matches_the_photos(tmp_path):
         ys, xs = np.nonzero(rgb.sum(axis=2) > 100.0)  # the sun's disc (3 x 3 texels: 8 degrees)
         assert len(ys) and abs(xs.mean() - 32.5) <= 1.5 and abs(ys.mean() - 32.5) <= 1.5, (azimuth, xs.mean(),
                                                                                             ys.mean())
+
+
+def test_weather_with_photo_backgrounds_is_an_error_at_its_key(tmp_path, photo_dir):
+    """A photo has no fog of its own: fog or haze over it is refused at the YAML key, before
+    anything renders (docs/weather.md)."""
+    from synthgen.scenario import check_inputs, load_scenario
+
+    d, _ = photo_dir
+    path = _scenario(tmp_path, photos=str(d), extra="weather: {fog: {visibility: 50}}")
+    with pytest.raises(sg.SynthgenError, match=r"aug\.yaml:\d+:\d+: weather\.fog: not available with photo backgrounds"):
+        check_inputs(load_scenario(path))
+

@@ -70,7 +70,7 @@ def test_non_absorbing_medium_keeps_the_furnace():
     for label in ("clear", "medium"):
         if label == "medium":
             s.set_medium("homogeneous", {"extinction": 1.0, "albedo": 1.0, "g": 0.5})
-        r = s.render(spp=64, max_depth=200, rr_depth=200, seed=5)
+        r = s.render(spp=64, max_depth=200, rr_depth=200, max_medium_depth=4000, seed=5)
         means[label] = float(np.asarray(r.rgb, np.float64).mean())
     print(f"\nfurnace (expect 2): clear {means['clear']:.4f}, with a non-absorbing medium {means['medium']:.4f}")
     assert abs(means["clear"] - 2.0) < 0.03, means
@@ -159,7 +159,7 @@ def test_medium_with_catchers_is_an_error():
 
 
 def test_single_scattering_of_the_sun_is_analytic():
-    """Single scattering (max_depth 2: the camera segment and one scattering vertex) of a delta
+    """Single scattering (max_medium_depth 1: one scattering vertex) of a delta
     sun in a layer, seen along horizontal rays (a one-row image whose pixels span 1e-4 rad
     vertically, fanned over 90 degrees of azimuth): along a horizontal ray the sun's
     transmittance to every point is the same, T_sun = exp(-sigma (top - h) / sin(elevation)),
@@ -179,7 +179,7 @@ def test_single_scattering_of_the_sun_is_analytic():
     W = 64
     pose = sg.PinholeCamera.look_at((0.0, h, 0.0), (1.0, h, 1.0), (0.0, 1.0, 0.0))
     s.set_camera(sg.PinholeCamera(W / 2.0, 1.0e4, W / 2.0, 0.5, W, 1, pose))
-    r = s.render(spp=64, max_depth=2, seed=3)
+    r = s.render(spp=64, max_depth=2, max_medium_depth=1, seed=3)
     img = np.asarray(r.rgb, np.float64)[0, :, 0]
     R = np.asarray(pose, np.float64)[:3, :3]
     t_sun = np.exp(-sigma * (top - h) / sun[1])

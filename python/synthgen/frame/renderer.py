@@ -230,6 +230,10 @@ class FrameRenderer:
             photo_info = dict(photo_info or {})
             photo_info["dome"] = self._add_dome(fp, camera, keep, objects, render_seed)
         self.scene.set_camera(camera)
+        if spec.weather is not None:
+            self.scene.set_medium("homogeneous", dict(spec.weather[1]))
+        elif self.scene.medium_type() is not None:
+            self.scene.clear_medium()
         self.scene.commit()
         from ..post.quality import exposure_scale
 
@@ -275,6 +279,8 @@ class FrameRenderer:
             # The render's estimated error against its converged image (from its half-sample
             # images; after the scene's exposure): synthgen.post.quality.
             "noise": self._noise(res, spec.post),
+            # The frame's fog or haze (docs/weather.md): the medium's parameters, or none.
+            "weather": ({"kind": spec.weather[0], **spec.weather[1]} if spec.weather is not None else None),
             # Which image rgb is: the render's mean ("raw") or the denoiser's output ("denoised").
             "rgb": "denoised" if rs["denoise"] else "raw",
             # What this frame shares with others, for the train/val split (outputs.split): its
@@ -302,6 +308,9 @@ class FrameRenderer:
 
                 rec["lamps"] = dict(rec["lamps"], image=project_lamps(
                     rec["lamps"], objects[k].shape.lamps, objects[k].world, camera, arrays.get("depth")))
+        if spec.weather is not None:
+            _weather_labels(meta["objects"], self.scene.camera_transmittance(np.asarray(res.distance)),
+                            arrays["rgb"], arrays["instance_id"])
         if fp is None and photo_meta is not None:
             meta["background"] = photo_meta
         if fp is not None:
@@ -489,3 +498,34 @@ class FrameRenderer:
         if o.roll or o.pitch:
             return tilted(m, dims, o.roll, o.pitch) + (dims, None)
         return m, 0.5 * math.hypot(dims[0], dims[2]), dims, None
+
+
+def _weather_labels(records: List[Dict[str, Any]], transmittance: np.ndarray, rgb: np.ndarray,
+                    instance_id: np.ndarray) -> None:
+    """Per visible object of a foggy frame, ``weather``: ``transmittance``, the mean over its
+    pixels of the medium's transmittance along the camera ray to it (the share of its own light
+    that reaches the camera: Koschmieder's factor), and ``contrast``, its visible contrast in
+    the rendered image, |Y_object - Y_surround| / Y_surround (luminance; the surround: the
+    unlabelled pixels within 3 pixels of it), so that objects fog has made invisible can be
+    filtered."""
+    y = np.asarray(rgb, np.float64)[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    for rec in records:
+        if rec.get("dropped") or not rec.get("visible_pixels"):
+            continue
+        mask = instance_id == rec["instance_id"]
+        if not mask.any():
+            continue
+        near = mask.copy()
+        for _ in range(3):
+            grown = near.copy()
+            grown[1:] |= near[:-1]
+            grown[:-1] |= near[1:]
+            grown[:, 1:] |= near[:, :-1]
+            grown[:, :-1] |= near[:, 1:]
+            near = grown
+        ring = near & (instance_id == 0)
+        y_obj = float(y[mask].mean())
+        y_ring = float(y[ring].mean()) if ring.any() else float("nan")
+        contrast = abs(y_obj - y_ring) / y_ring if ring.any() and y_ring > 1e-6 else float("nan")
+        rec["weather"] = {"transmittance": round(float(np.asarray(transmittance)[mask].mean()), 6),
+                          "contrast": round(contrast, 6) if np.isfinite(contrast) else None}

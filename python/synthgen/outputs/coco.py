@@ -216,9 +216,11 @@ def frame_annotations(meta: Mapping[str, Any], instance_id: np.ndarray) -> List[
     for o in meta["objects"]:
         if o.get("dropped") or not o.get("visible_pixels"):
             continue
-        a = coco_annotation(1, int(meta["frame"]), int(o["class_id"]), instance_id == o["instance_id"],
-                            extra={"instance_id": o["instance_id"], "occlusion": o["occlusion"],
-                                   "truncation": o["truncation"], "source": "synthetic"})
+        extra = {"instance_id": o["instance_id"], "occlusion": o["occlusion"], "truncation": o["truncation"],
+                 "source": "synthetic"}
+        if "weather" in o:  # fog or haze: how much of the object it lets through (docs/weather.md)
+            extra.update({"transmittance": o["weather"]["transmittance"], "contrast": o["weather"]["contrast"]})
+        a = coco_annotation(1, int(meta["frame"]), int(o["class_id"]), instance_id == o["instance_id"], extra=extra)
         if a is not None:
             anns.append(a)
     for p in meta.get("parts", []):  # plate-only labels: their exact visible masks

@@ -175,6 +175,13 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
             raise SceneFileError(sc.source, rl.line, rl.column, rl.path,
                                  "not available with photo backgrounds yet: their composite is "
                                  "built from the differential buffers, which the denoiser does not filter")
+        weather = spec["weather"]
+        for kind in ("fog", "haze"):
+            if weather.get(kind) is not None:
+                wl = weather.locs.get(kind, weather.loc)
+                raise SceneFileError(sc.source, wl.line, wl.column, wl.path,
+                                     "not available with photo backgrounds yet: the photo has no fog of its own "
+                                     "(fog on photos, from their depth, is to come: docs/weather.md)")
         try:
             ps = PhotoSet(bg, sc.base_dir, sc.seed)
             ps.check_count(int(spec["count"]))

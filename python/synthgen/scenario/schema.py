@@ -174,7 +174,7 @@ BACKGROUND = Record(
 
 #: The render settings a scenario sets (the seed of each frame derives from the scenario's).
 RENDER_KEYS = ("spp", "max_depth", "rr_depth", "threads", "clamp_indirect", "noise_threshold", "target_psnr",
-               "min_spp", "max_spp", "denoise")
+               "min_spp", "max_spp", "denoise", "max_medium_depth")
 RENDER = settings_record("render", "path_tracer", keys=RENDER_KEYS, default=EMPTY,
                          doc="path tracing settings (threads: per worker; 0 = all cores / workers)")
 
@@ -182,6 +182,28 @@ RENDER = settings_record("render", "path_tracer", keys=RENDER_KEYS, default=EMPT
 #: A post-processing step: ``{type: NAME, ...its parameters}`` (:mod:`synthgen.post`).
 POST_STEP = Record({"type": Choice([s.name for s in post.steps()], doc="post-processing step")}, tag="type",
                    variants={s.name: randomized(s.schema) for s in post.steps()}, doc="a post-processing step")
+
+
+def _weather_medium(visibility: float, top: float, albedo: float, g: float, doc: str) -> Record:
+    """One weather medium (the `homogeneous` medium plugin, medium/homogeneous.cpp), each value
+    also a distribution."""
+    return Record({
+        "probability": Number(1.0, min=0.0, max=1.0, doc="chance that a frame has it"),
+        "visibility": R(Number(visibility, min=0.0, min_open=True,
+                               doc="meteorological visibility in metres (contrast 2% at this distance: extinction "
+                                   "3.912 / visibility)")),
+        "top": R(Number(top, doc="height of the layer's top in metres (clear air above)")),
+        "albedo": R(Number(albedo, min=0.0, max=1.0, doc="single-scattering albedo")),
+        "g": R(Number(g, min=-0.99, max=0.99, doc="Henyey-Greenstein asymmetry (> 0: forward scattering)")),
+    }, default=None, doc=doc)
+
+
+#: Weather (docs/weather.md): a participating medium per frame. Fog first: a frame without fog
+#: may get haze.
+WEATHER = Record({
+    "fog": _weather_medium(150.0, 40.0, 0.95, 0.75, "fog: water droplets in a layer near the ground"),
+    "haze": _weather_medium(4000.0, 800.0, 0.9, 0.7, "haze: aerosols in a deep layer (far objects fade)"),
+}, default=EMPTY, doc="weather: fog or haze (a homogeneous medium; docs/weather.md)")
 
 
 class _Resolution(Field):
@@ -215,6 +237,7 @@ SCENARIO_SCHEMA = Record(
                       default=EMPTY, doc="ground plane y = 0 (class 0, unlabelled)"),
      "objects": ListOf(OBJECT, REQUIRED, min_items=1, doc="object kinds"),
      "placement": PLACEMENT,
+     "weather": WEATHER,
      "render": RENDER,
      "outputs": ListOf(Choice(outputs.kind_names()), outputs.default_outputs(), doc="what to write"),
      "split": split.SCHEMA,
