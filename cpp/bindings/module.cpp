@@ -481,7 +481,7 @@ a BVH build). render() commits pending edits first.)doc")
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
               uint32_t tile_size, bool texture_filtering, float exposure, float clamp_indirect, float noise_threshold,
               float target_psnr, uint32_t min_spp, uint32_t max_spp, bool denoise, uint32_t max_medium_depth,
-              bool labels_only) {
+              bool next_event, bool labels_only) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -498,6 +498,7 @@ a BVH build). render() commits pending edits first.)doc")
              rs.max_spp = max_spp;
              rs.denoise = denoise;
              rs.max_medium_depth = max_medium_depth;
+             rs.next_event = next_event;
              rs.labels_only = labels_only;
              auto film = std::make_shared<Film>();
              {
@@ -518,7 +519,8 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("min_spp") = render_default<uint32_t>("min_spp"),
            py::arg("max_spp") = render_default<uint32_t>("max_spp"),
            py::arg("denoise") = render_default<bool>("denoise"),
-           py::arg("max_medium_depth") = render_default<uint32_t>("max_medium_depth"), py::arg("labels_only") = false,
+           py::arg("max_medium_depth") = render_default<uint32_t>("max_medium_depth"),
+           py::arg("next_event") = render_default<bool>("next_event"), py::arg("labels_only") = false,
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
            "centre ray's coverage).")

@@ -31,6 +31,9 @@ PluginInfo render_info() {
       .add(param::integer("spp", 16, "samples per pixel").in(1, 1 << 20))
       .add(param::integer("max_depth", 8, "maximum ray segments from the camera (1: emitters only)").in(1, 1024))
       .add(param::integer("rr_depth", 5, "path length at which Russian roulette starts").in(0, 1024))
+      .add(param::boolean("next_event", true, "next-event estimation (light sampling, MIS with BSDF and phase "
+                                              "sampling); false: BSDF and phase sampling alone, for checks -- "
+                                              "delta lights (point, spot, a 0-degree sun) then light nothing"))
       .add(param::integer("max_medium_depth", 64, "scattering events in a medium (fog, haze) a path may have "
                                                   "besides its max_depth segments: multiple scattering in thick "
                                                   "fog needs many; 0: single scattering").in(0, 4096))
@@ -61,6 +64,7 @@ std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const Pl
   rs->max_depth = uint32_t(p.get_int("max_depth"));
   rs->rr_depth = uint32_t(p.get_int("rr_depth"));
   rs->max_medium_depth = uint32_t(p.get_int("max_medium_depth"));
+  rs->next_event = p.get_bool("next_event");
   rs->seed = uint64_t(p.get_int("seed"));
   rs->threads = uint32_t(p.get_int("threads"));
   rs->tile_size = uint32_t(p.get_int("tile_size"));
@@ -121,7 +125,7 @@ class PathTracer {
       Color le = light->le(st.ray.d);
       if (is_black(le)) continue;
       float w = 1.f;
-      if (!st.prev_delta) {
+      if (!st.prev_delta && m_s.next_event) {
         LightSampleContext ctx{st.prev_p, Vec3f(0.f), st.prev_n};
         w = power_heuristic(st.prev_pdf, sc.light_pmf(st.prev_p, li, st.prev_light_total[sc.light_group[li]]) *
                                              light->pdf_li(ctx, st.ray.d));
@@ -164,7 +168,7 @@ class PathTracer {
   uint32_t medium_nee(PathState& st, float t_end, const PixelSampler& sampler, Ray* shadow, RayLayer layer,
                       bool track) const {
     const RenderScene& sc = m_scene;
-    if (!sc.medium || sc.lights.empty() || st.medium_bounces >= m_s.max_medium_depth) return 0;
+    if (!sc.medium || sc.lights.empty() || !m_s.next_event || st.medium_bounces >= m_s.max_medium_depth) return 0;
     const uint32_t dim = k_medium_nee_dims + st.bounce * 8u;
     float t, p_scatter;
     if (!sc.medium->sample_in_segment(st.ray.o, st.ray.d, t_end, sampler.get_independent(dim), &t, &p_scatter))
@@ -311,7 +315,7 @@ class PathTracer {
       if (!is_black(le)) {
         float w = 1.f;
         const int32_t li = inst.prim_light ? inst.prim_light[hit.prim] : -1;
-        if (!st.prev_delta && li >= 0) {
+        if (!st.prev_delta && li >= 0 && m_s.next_event) {
           float cos_l = std::fabs(dot(si.ng, wo));
           const AreaLight* area = static_cast<const AreaLight*>(sc.lights[size_t(li)]);
           float pdf_light = sc.light_pmf(st.prev_p, uint32_t(li), st.prev_light_total[sc.light_group[size_t(li)]]) *
@@ -339,7 +343,7 @@ class PathTracer {
 
     // Next-event estimation: sample a light of each group, defer the shadow rays.
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
-    if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty()) {
+    if ((flags & (k_bsdf_diffuse | k_bsdf_glossy)) && !sc.lights.empty() && m_s.next_event) {
       st.prev_p = si.p;
       st.prev_n = (flags & k_bsdf_transmission) ? Vec3f(0.f) : face_forward(si.ns, wo);
       const LightSampleContext ctx{si.p, si.p_error, st.prev_n};

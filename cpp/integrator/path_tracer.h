@@ -16,6 +16,7 @@ struct RenderSettings {
   uint32_t max_depth = 8;    ///< maximum number of ray segments from the camera (1 = direct view of emitters)
   uint32_t rr_depth = 5;     ///< Russian roulette starts once a path has this many segments
   uint32_t max_medium_depth = 64;  ///< scattering events in media a path may have (besides max_depth)
+  bool next_event = true;  ///< light sampling with MIS; false: BSDF / phase sampling alone (checks)
   uint64_t seed = 0;
   uint32_t threads = 0;      ///< 0 = all hardware threads
   uint32_t tile_size = 16;

@@ -198,3 +198,41 @@ def test_single_scattering_of_the_sun_is_analytic():
     print(f"\nsingle scattering: radiance {img.min():.5f}..{img.max():.5f} over the fan, analytic "
           f"{expect.min():.5f}..{expect.max():.5f}, max relative error {err.max():.4f}")
     assert err.max() < 0.005, err.max()
+
+
+def test_light_sampling_on_and_off_agree_in_fog():
+    """Energy with MIS on and off: fog (visibility 30 m, an 8 m layer) over a ground, a glossy box,
+    a spherical emitter and a 10-degree sun under a uniform sky, rendered with next-event
+    estimation and MIS (64 spp) and with BSDF and phase sampling alone (`next_event: false`,
+    1024 spp): the image means agree within 4 standard errors (from each render's half-sample
+    images) in every channel, and light sampling is worth its name (its per-sample variance is
+    below a quarter of the other's; measured about 1/95)."""
+    s = sg.Scene()
+    g = P.ground()
+    s.add_instance(s.add_mesh(g["positions"], g["indices"], normals=g["normals"]), np.eye(4),
+                   material_id=s.add_material("diffuse", {"albedo": 0.5}))
+    b = P.box((1.0, 1.0, 1.0))
+    s.add_instance(s.add_mesh(b["positions"], b["indices"], normals=b["normals"]), P.translate([1.0, 0.5, 5.0]),
+                   class_id=1, material_id=s.add_material("coated", {"albedo": [0.6, 0.2, 0.1], "roughness": 0.3}))
+    sp = P.uv_sphere(0.5)
+    s.add_instance(s.add_mesh(sp["positions"], sp["indices"], normals=sp["normals"]), P.translate([-1.0, 2.0, 6.0]),
+                   material_id=s.add_material("emissive", {"radiance": 8.0}))
+    s.add_light("sun", {"direction": [0.3, 0.7, 0.5], "irradiance": 3.0, "angular_diameter": 10.0})
+    s.add_light("environment", {"radiance": 0.3})
+    s.set_medium("homogeneous", {"visibility": 30.0, "top": 8.0, "g": 0.5})
+    pose = sg.PinholeCamera.look_at((0.0, 1.5, 0.0), (0.0, 1.0, 5.0), (0.0, 1.0, 0.0))
+    s.set_camera(sg.PinholeCamera.from_fov(50.0, 64, 48, pose))
+    stats = {}
+    for nee, spp, seed in ((True, 64, 7), (False, 1024, 8)):
+        r = s.render(spp=spp, max_depth=6, seed=seed, next_event=nee)
+        x = np.asarray(r.rgb, np.float64)
+        d = np.asarray(r.rgb_even, np.float64) - np.asarray(r.rgb_odd, np.float64)
+        n = x.shape[0] * x.shape[1]
+        se = np.sqrt((d ** 2 / 4.0).sum(axis=(0, 1))) / n
+        stats[nee] = (x.mean(axis=(0, 1)), se, se ** 2 * spp)
+    (m1, s1, v1), (m0, s0, v0) = stats[True], stats[False]
+    z = np.abs(m1 - m0) / np.sqrt(s1 ** 2 + s0 ** 2)
+    print(f"\nfog, light sampling on: mean {m1.round(5)} +- {s1.round(5)}; off: {m0.round(5)} +- {s0.round(5)}; "
+          f"z {z.round(2)}; per-sample variance off / on {float((v0 / v1).mean()):.1f}")
+    assert (z < 4.0).all(), z
+    assert (v1 < v0 / 4.0).all(), (v1, v0)
