@@ -47,7 +47,8 @@ CPP_FOLDERS = {
     "light": "the Light interface, one file per light plugin; area lights (from emissive materials)",
     "camera": "PinholeCamera (OpenCV convention) and its plugin declaration (`pinhole.cpp`)",
     "medium": "the Medium interface and Henyey-Greenstein phase function, one file per medium plugin (fog, haze)",
-    "integrator": "the committed render scene, interactions, ray cones, the path tracer and its settings",
+    "integrator": "the committed render scene, interactions, ray cones, the path tracer, its paths through media "
+                  "(`volume.h`) and its settings",
     "film": "radiance and label buffers, render statistics; the denoiser (`denoise.cpp`)",
     "io": "each third-party API in one file: OpenImageIO (a lazily loaded plugin), assimp",
     "api": "Scene, the integration API; its XML persistence (`scene_xml.cpp`, pugixml) and file import",

@@ -43,7 +43,7 @@ struct PathState {
   Color L{0.f}, beta{1.f};
   /// NEE contributions, each added if its shadow ray is unoccluded: per light group at the
   /// vertex (slots 0 .. k_light_groups - 1), then per light group at the point the medium
-  /// scatters along the segment (decoupled next-event estimation, PathTracer::medium_nee).
+  /// scatters along the segment (decoupled next-event estimation, VolumeTracer::next_event in volume.h).
   Color shadow_contrib[k_shadow_slots];
   float prev_pdf = 0.f;
   /// Where the previous vertex chose its lights, each group's light weights' sum there
@@ -77,6 +77,47 @@ struct PathState {
   bool touched = false;
   float cone_width = 0.f, cone_spread = 0.f;  ///< ray cone for texture filtering (ray_cone.h)
 };
+
+/// A contribution to a sample's radiance: clamped when it is indirect (`vertex`, the index of
+/// the surface it lights, >= 1: it reached the camera over more than one surface) to `limit`.
+/// NOTE: as Cycles' sample_clamp_indirect (intern/cycles/kernel/film/light_passes.h,
+/// film_clamp_light): the contribution is scaled down so that the sum of its channels is at
+/// most the limit, keeping its colour.
+inline Color clamp_indirect(const Color& c, uint32_t vertex, float limit) {
+  if (vertex == 0) return c;
+  const float sum = c.x + c.y + c.z;
+  return sum > limit ? c * (limit / sum) : c;
+}
+
+/// The shadow ray of next-event estimation from `o` (already offset off its surface, if any)
+/// towards light sample `ls`: to infinity for infinite lights, else to just before the light's
+/// point (offset off the emitter, except for delta lights).
+inline Ray shadow_ray_to(const Vec3f& o, const LightSample& ls) {
+  Ray sh;
+  sh.o = o;
+  if (ls.infinite) {
+    sh.d = ls.wi;
+    sh.t_max = k_inf;
+  } else {
+    Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
+    sh.d = target - sh.o;
+    sh.t_max = 1.f - k_shadow_epsilon;
+  }
+  return sh;
+}
+
+/// Russian roulette once the path has more than `rr_depth` vertices (surfaces and scattering
+/// events; its direction sampled, st.bounce already advanced): false ends it, else the survivor's
+/// throughput is scaled up.
+/// NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component; eta_scale
+/// as in pbrt-v4 (paths inside glass are not culled).
+inline bool survives_roulette(PathState& st, const PixelSampler& sampler, uint32_t rr_depth) {
+  if (st.segments + st.medium_bounces <= rr_depth) return true;
+  const float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
+  if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) return false;
+  st.beta *= 1.f / (1.f - q);
+  return true;
+}
 
 /// Pair keys (PixelSampler::pair_key) of one path vertex's sample dimensions. They depend
 /// only on (seed, pixel, bounce), so the lanes of a packet share them.

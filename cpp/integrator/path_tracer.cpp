@@ -17,6 +17,7 @@
 #include "integrator/adaptive.h"
 #include "integrator/path_state.h"
 #include "integrator/ray_cone.h"
+#include "integrator/volume.h"
 
 namespace sg {
 
@@ -97,7 +98,8 @@ class PathTracer {
         m_clamp(settings.clamp_indirect > 0.f ? settings.clamp_indirect / settings.exposure : k_inf),
         m_max_spp(settings.max_samples()),
         m_block(settings.adaptive() ? settings.adaptive_step() : 0),
-        m_far(far_feature_depth(scene)) {}
+        m_far(far_feature_depth(scene)),
+        m_volume(scene, settings, m_clamp) {}
 
   /// The denoising feature depth of escaped samples: beyond everything in the scene.
   static float far_feature_depth(const RenderScene& sc) {
@@ -105,16 +107,8 @@ class PathTracer {
     return 2.f * (length(sc.camera.position() - sc.bounds.center()) + sc.bounds.radius()) + 1.f;
   }
 
-  /// A contribution to a sample's radiance: clamped when it is indirect (`vertex`, the index
-  /// of the surface it lights, >= 1: it reached the camera over more than one surface).
-  /// NOTE: as Cycles' sample_clamp_indirect (intern/cycles/kernel/film/light_passes.h,
-  /// film_clamp_light): the contribution is scaled down so that the sum of its channels is at
-  /// most the limit, keeping its colour.
-  Color clamped(const Color& c, uint32_t vertex) const {
-    if (vertex == 0) return c;
-    const float sum = c.x + c.y + c.z;
-    return sum > m_clamp ? c * (m_clamp / sum) : c;
-  }
+  /// A contribution clamped by clamp_indirect (path_state.h) when it is indirect.
+  Color clamped(const Color& c, uint32_t vertex) const { return clamp_indirect(c, vertex, m_clamp); }
 
   /// The current ray escaped: infinite lights, MIS-weighted against light sampling.
   void on_miss(PathState& st) const {
@@ -138,143 +132,6 @@ class PathTracer {
     if (st.bounce > 0 && st.all_glossy)
       for (const Light* light : sc.reflection_lights) st.L += clamped(st.beta * light->le(st.ray.d), st.bounce - 1);
     st.active = false;
-  }
-
-  /// Transmittance of the global medium along a shadow ray (1 without one).
-  float transmittance(const Ray& r) const {
-    return m_scene.medium ? m_scene.medium->transmittance(r.o, r.d, r.t_max) : 1.f;
-  }
-
-  /// A free flight through the global medium along the current ray, up to `t_end` (its hit, or
-  /// inf): true and the event's ray parameter in *t when it scatters first. The estimator's
-  /// weight is the medium's albedo at an event and 1 when the flight passes (medium.h).
-  bool medium_event(const PathState& st, float t_end, const PixelSampler& sampler, float* t) const {
-    if (!m_scene.medium) return false;
-    const float u = sampler.get_independent(2 + st.bounce * k_dims_per_vertex + 7);
-    return m_scene.medium->sample_distance(st.ray.o, st.ray.d, t_end, u, t);
-  }
-
-  /// Decoupled next-event estimation in the medium along the current segment [0, t_end): the
-  /// light scattered towards the path at a point drawn from the free-flight density conditioned
-  /// on scattering within the segment, one light of each group, weighted by the probability of
-  /// scattering at all (1 - T). Fills shadow[g] / st.shadow_contrib[k_light_groups + g]; returns
-  /// the mask of the groups it filled.
-  /// NOTE: the expectation equals next-event estimation at the vertex where the free flight
-  /// scatters (which then does none), but every segment gets an estimate instead of the
-  /// fraction 1 - T that scatters: far less noise in the single-scattered light (the "decoupled"
-  /// direct lighting of production renderers, e.g. Cycles' volume integrator, which samples the
-  /// direct-light point apart from the indirect scattering decision). MIS with phase sampling at
-  /// the same point is consistent because both use the light choice there (on_medium).
-  uint32_t medium_nee(PathState& st, float t_end, const PixelSampler& sampler, Ray* shadow, RayLayer layer,
-                      bool track) const {
-    const RenderScene& sc = m_scene;
-    if (!sc.medium || sc.lights.empty() || !m_s.next_event || st.medium_bounces >= m_s.max_medium_depth) return 0;
-    const uint32_t dim = k_medium_nee_dims + st.bounce * 8u;
-    float t, p_scatter;
-    if (!sc.medium->sample_in_segment(st.ray.o, st.ray.d, t_end, sampler.get_independent(dim), &t, &p_scatter))
-      return 0;
-    const Medium& medium = *sc.medium;
-    const Vec3f p = st.ray.o + st.ray.d * t;
-    const Vec3f wo = -normalize(st.ray.d);
-    const HenyeyGreenstein phase = medium.phase();
-    const Color beta = st.beta * medium.albedo() * p_scatter;
-    if (is_black(beta)) return 0;
-    const LightSampleContext ctx{p, Vec3f(0.f), Vec3f(0.f)};
-    uint32_t requested = 0;
-    for (int g = 0; g < RenderScene::k_light_groups; ++g) {
-      if (sc.group_lights[g].empty()) continue;
-      const uint32_t d = dim + 1u + 3u * uint32_t(g);
-      float pick_pmf;
-      size_t li = sc.pick_light(g, p, sampler.get_independent(d), &pick_pmf);
-      const Light* light = sc.lights[li];
-      if (layer == RayLayer::catchers && !sc.light_in_catcher_layer[li]) continue;
-      LightSample ls;
-      if (!light->sample(ctx, Vec2f(sampler.get_independent(d + 1), sampler.get_independent(d + 2)), &ls)) continue;
-      const float f = phase.eval(wo, ls.wi);
-      if (!(f > 0.f)) continue;
-      Ray& sh = shadow[g];
-      sh.o = p;
-      if (ls.infinite) {
-        sh.d = ls.wi;
-        sh.t_max = k_inf;
-      } else {
-        Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
-        sh.d = target - sh.o;
-        sh.t_max = 1.f - k_shadow_epsilon;
-      }
-      const float tr = transmittance(sh);
-      if (!(tr > 0.f)) continue;
-      const float light_pdf = pick_pmf * ls.pdf;
-      // NOTE: MIS weights from the directions' densities alone (light vs phase sampling); the
-      // free flight's probability of reaching the light (T) is left out of both, which keeps
-      // the weights a partition of unity (unbiased) -- pbrt-v4's volumetric path tracer also
-      // folds T into them (its r_u / r_l ratios), slightly better where the medium is thick.
-      const float w = ls.delta ? 1.f : power_heuristic(light_pdf, f);
-      st.shadow_contrib[RenderScene::k_light_groups + g] = clamped(beta * ls.li * (f * w * tr / light_pdf), st.bounce);
-      requested |= 1u << g;
-      if (track && !sc.light_in_catcher_layer[li]) st.touched = true;
-    }
-    return requested;
-  }
-
-  /// The current ray scattered in the medium at ray parameter t: a new direction from the phase
-  /// function (the light the medium scatters along the segment was estimated by medium_nee). The
-  /// same bookkeeping as on_hit.
-  void on_medium(PathState& st, float t, const PixelSampler& sampler, VertexKeys& keys) const {
-    const RenderScene& sc = m_scene;
-    const Medium& medium = *sc.medium;
-    const Vec3f p = st.ray.o + st.ray.d * t;
-    const Vec3f wo = -normalize(st.ray.d);
-    st.beta *= medium.albedo();
-    st.path_length += t * length(st.ray.d);
-    st.cone_width += st.cone_spread * t;
-    if (!st.feature_final) {
-      st.feature_albedo = medium.albedo();
-      st.feature_normal = Vec3f(0.f);
-      st.feature_depth = st.path_length;
-      st.feature_final = true;
-    }
-    // NOTE: scattering events count apart from max_depth (Cycles' volume bounces, pbrt's
-    // maxDepth counts both): multiple scattering in thick fog takes many, and cutting them off at
-    // a surface budget darkens fog that is bright in reality (light diffuses through the layer).
-    if (st.medium_bounces >= m_s.max_medium_depth || is_black(st.beta)) {
-      st.active = false;
-      return;
-    }
-    const HenyeyGreenstein phase = medium.phase();
-    keys.update(st.bounce, sampler);
-    // Light was sampled for this segment by medium_nee (decoupled); what a phase-sampled
-    // direction finds is weighed against it with the light choice at this point.
-    st.prev_p = p;
-    st.prev_n = Vec3f(0.f);
-    for (int g = 0; g < RenderScene::k_light_groups; ++g) {
-      st.prev_light_total[g] = 0.f;
-      if (sc.group_lights[g].empty()) continue;
-      float pmf;
-      sc.pick_light(g, p, 0.5f, &pmf, &st.prev_light_total[g]);
-    }
-    float pdf;
-    const Vec3f wi = phase.sample(wo, sampler.get_2d_keyed(keys.bsdf), &pdf);
-    if (!(pdf > 0.f)) {
-      st.active = false;
-      return;
-    }
-    // The phase function is sampled exactly: its value over its pdf is 1.
-    st.prev_pdf = pdf;
-    st.prev_delta = false;
-    st.all_glossy = false;
-    st.cone_spread += k_pi / 8.f;  // as a diffuse bounce's widest spread (ray_cone.h)
-    ++st.medium_bounces;
-    ++st.bounce;
-    if (st.segments + st.medium_bounces > m_s.rr_depth) {
-      float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
-      if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
-        st.active = false;
-        return;
-      }
-      st.beta *= 1.f / (1.f - q);
-    }
-    st.ray = Ray{p, wi, k_inf};
   }
 
   /// The current ray hit a surface: add emission, prepare the shadow rays of next-event
@@ -361,17 +218,8 @@ class PathTracer {
         float bsdf_pdf;
         Color f = mat->eval_pdf(si, wo, ls.wi, &bsdf_pdf);
         if (is_black(f)) continue;
-        Ray& sh = shadow[g];
-        sh.o = offset_ray_origin(si.p, si.p_error, si.ng, ls.wi);
-        if (ls.infinite) {
-          sh.d = ls.wi;
-          sh.t_max = k_inf;
-        } else {
-          Vec3f target = ls.delta ? ls.p_light : offset_ray_origin(ls.p_light, ls.p_light_error, ls.n_light, -ls.wi);
-          sh.d = target - sh.o;
-          sh.t_max = 1.f - k_shadow_epsilon;
-        }
-        const float tr = transmittance(sh);
+        const Ray& sh = shadow[g] = shadow_ray_to(offset_ray_origin(si.p, si.p_error, si.ng, ls.wi), ls);
+        const float tr = m_volume.transmittance(sh);
         if (!(tr > 0.f)) continue;
         float light_pdf = pick_pmf * ls.pdf;
         float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);
@@ -400,14 +248,9 @@ class PathTracer {
       st.active = false;
       return shadow_requested;
     }
-    // NOTE: Russian roulette (Arvo & Kirk 1990) on the throughput's largest component.
-    if (st.segments + st.medium_bounces > m_s.rr_depth) {
-      float q = std::max(0.05f, 1.f - max_component(st.beta) * st.eta_scale);
-      if (sampler.get_independent(2 + (st.bounce - 1) * k_dims_per_vertex + 6) < q) {
-        st.active = false;
-        return shadow_requested;
-      }
-      st.beta *= 1.f / (1.f - q);
+    if (!survives_roulette(st, sampler, m_s.rr_depth)) {
+      st.active = false;
+      return shadow_requested;
     }
     st.ray = spawn_ray(si, bs.wi);
     return shadow_requested;
@@ -460,23 +303,18 @@ class PathTracer {
         for (int g = 0; g < S; ++g) shadow_packets[g].valid[i] = 0;
         if (!st[i].active) continue;
         Ray shadow[S];
-        uint32_t mask = 0;
-        if (sc.medium) {
-          const float t_end = hp.found[i] ? hp.hit[i].t : k_inf;
+        // The medium along the segment first (nothing without one): its decoupled light estimate,
+        // then whether the path scatters before the segment's end.
+        const float t_end = hp.found[i] ? hp.hit[i].t : k_inf;
+        uint32_t mask = m_volume.next_event(st[i], t_end, samplers[i], shadow + G, layer, track) << G;
+        float t_event;
+        if (m_volume.event(st[i], t_end, samplers[i], &t_event)) {
           if (st[i].bounce == 0 && hp.found[i]) st[i].hit_geometry = true;  // alpha: geometry, not fog
-          mask |= medium_nee(st[i], t_end, samplers[i], shadow + G, layer, track) << G;
-          float t_event;
-          if (medium_event(st[i], t_end, samplers[i], &t_event)) {
-            on_medium(st[i], t_event, samplers[i], keys[samplers[i].half()]);
-          } else if (!hp.found[i]) {
-            on_miss(st[i]);
-          } else {
-            mask |= on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
-          }
+          m_volume.scatter(st[i], t_event, samplers[i], keys[samplers[i].half()]);
         } else if (!hp.found[i]) {
           on_miss(st[i]);
         } else {
-          mask = on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
+          mask |= on_hit(st[i], hp.hit[i], samplers[i], keys[samplers[i].half()], shadow, layer, track);
         }
         for (int g = 0; g < S; ++g)
           if (mask & (1u << g)) {
@@ -655,6 +493,7 @@ class PathTracer {
   uint32_t m_max_spp;     ///< the most samples a pixel gets
   uint32_t m_block;       ///< PixelSampler's block (adaptive rounds; 0: one block)
   float m_far;            ///< feature depth of escaped samples
+  VolumeTracer m_volume;  ///< the segments' paths through the scene's medium (volume.h)
 };
 
 }  // namespace

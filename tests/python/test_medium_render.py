@@ -9,6 +9,12 @@ import synthgen as sg
 from synthgen import primitives as P
 
 
+def _add(s, geometry, world_from_object, **instance):
+    """An instance of a primitive's mesh (synthgen.primitives) in scene ``s``."""
+    mesh = s.add_mesh(geometry["positions"], geometry["indices"], normals=geometry["normals"])
+    return s.add_instance(mesh, world_from_object, **instance)
+
+
 def _absorbing_scene(extinction):
     """An emitter plane (radiance 2, facing the camera, 4 to 9 m away: tilted) in black
     surroundings, seen through a purely absorbing homogeneous medium."""
@@ -61,9 +67,8 @@ def test_non_absorbing_medium_keeps_the_furnace():
     scattering g 0.5, a mean free path of a third of the radius) scatters that uniform field
     into itself: still 2. Image mean within 1.5% without and with the medium."""
     s = sg.Scene()
-    sph = P.uv_sphere(3.0)
-    s.add_instance(s.add_mesh(sph["positions"], sph["indices"], normals=sph["normals"]), np.eye(4),
-                   material_id=s.add_material("emissive", {"radiance": 1.0, "albedo": 0.5, "two_sided": True}))
+    wall = s.add_material("emissive", {"radiance": 1.0, "albedo": 0.5, "two_sided": True})
+    _add(s, P.uv_sphere(3.0), np.eye(4), material_id=wall)
     pose = sg.PinholeCamera.look_at((0.0, 0.0, 0.0), (0.3, 0.2, 1.0), (0.0, 1.0, 0.0))
     s.set_camera(sg.PinholeCamera.from_fov(60.0, 32, 24, pose))
     means = {}
@@ -79,12 +84,9 @@ def test_non_absorbing_medium_keeps_the_furnace():
 
 def _foggy_street():
     s = sg.Scene()
-    g = P.ground()
-    s.add_instance(s.add_mesh(g["positions"], g["indices"], normals=g["normals"]), np.eye(4),
-                   material_id=s.add_material("diffuse", {"albedo": 0.3}))
-    b = P.box((1.8, 1.5, 4.2))
-    s.add_instance(s.add_mesh(b["positions"], b["indices"], normals=b["normals"]), P.translate([0.0, 0.75, 12.0]),
-                   class_id=1, instance_id=7, material_id=s.add_material("diffuse", {"albedo": [0.6, 0.1, 0.1]}))
+    _add(s, P.ground(), np.eye(4), material_id=s.add_material("diffuse", {"albedo": 0.3}))
+    _add(s, P.box((1.8, 1.5, 4.2)), P.translate([0.0, 0.75, 12.0]), class_id=1, instance_id=7,
+         material_id=s.add_material("diffuse", {"albedo": [0.6, 0.1, 0.1]}))
     s.add_light("sun", {"direction": [0.3, 0.8, -0.5], "irradiance": 3.0})
     s.add_light("environment", {"radiance": 0.4})
     pose = sg.PinholeCamera.look_at((0.0, 1.5, 0.0), (0.0, 1.0, 12.0), (0.0, 1.0, 0.0))
@@ -171,9 +173,8 @@ def test_single_scattering_of_the_sun_is_analytic():
     sun = np.array([0.3, 0.8, -0.5])
     sun /= np.linalg.norm(sun)
     s = sg.Scene()
-    b = P.box((0.1, 0.1, 0.1))
-    s.add_instance(s.add_mesh(b["positions"], b["indices"], normals=b["normals"]), P.translate([0.0, -1000.0, 0.0]),
-                   material_id=s.add_material("diffuse", {"albedo": 0.0}))  # a scene needs an instance
+    _add(s, P.box((0.1, 0.1, 0.1)), P.translate([0.0, -1000.0, 0.0]),
+         material_id=s.add_material("diffuse", {"albedo": 0.0}))  # a scene needs an instance
     s.add_light("sun", {"direction": sun.tolist(), "irradiance": E, "angular_diameter": 0.0})
     s.set_medium("homogeneous", {"extinction": sigma, "albedo": albedo, "g": g, "top": top})
     W = 64
@@ -208,15 +209,10 @@ def test_light_sampling_on_and_off_agree_in_fog():
     images) in every channel, and light sampling is worth its name (its per-sample variance is
     below a quarter of the other's; measured about 1/95)."""
     s = sg.Scene()
-    g = P.ground()
-    s.add_instance(s.add_mesh(g["positions"], g["indices"], normals=g["normals"]), np.eye(4),
-                   material_id=s.add_material("diffuse", {"albedo": 0.5}))
-    b = P.box((1.0, 1.0, 1.0))
-    s.add_instance(s.add_mesh(b["positions"], b["indices"], normals=b["normals"]), P.translate([1.0, 0.5, 5.0]),
-                   class_id=1, material_id=s.add_material("coated", {"albedo": [0.6, 0.2, 0.1], "roughness": 0.3}))
-    sp = P.uv_sphere(0.5)
-    s.add_instance(s.add_mesh(sp["positions"], sp["indices"], normals=sp["normals"]), P.translate([-1.0, 2.0, 6.0]),
-                   material_id=s.add_material("emissive", {"radiance": 8.0}))
+    _add(s, P.ground(), np.eye(4), material_id=s.add_material("diffuse", {"albedo": 0.5}))
+    _add(s, P.box((1.0, 1.0, 1.0)), P.translate([1.0, 0.5, 5.0]), class_id=1,
+         material_id=s.add_material("coated", {"albedo": [0.6, 0.2, 0.1], "roughness": 0.3}))
+    _add(s, P.uv_sphere(0.5), P.translate([-1.0, 2.0, 6.0]), material_id=s.add_material("emissive", {"radiance": 8.0}))
     s.add_light("sun", {"direction": [0.3, 0.7, 0.5], "irradiance": 3.0, "angular_diameter": 10.0})
     s.add_light("environment", {"radiance": 0.3})
     s.set_medium("homogeneous", {"visibility": 30.0, "top": 8.0, "g": 0.5})

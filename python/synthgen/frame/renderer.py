@@ -508,6 +508,8 @@ def _weather_labels(records: List[Dict[str, Any]], transmittance: np.ndarray, rg
     the rendered image, |Y_object - Y_surround| / Y_surround (luminance; the surround: the
     unlabelled pixels within 3 pixels of it), so that objects fog has made invisible can be
     filtered."""
+    from ..post.photo.measure import dilate
+
     y = np.asarray(rgb, np.float64)[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
     for rec in records:
         if rec.get("dropped") or not rec.get("visible_pixels"):
@@ -515,15 +517,7 @@ def _weather_labels(records: List[Dict[str, Any]], transmittance: np.ndarray, rg
         mask = instance_id == rec["instance_id"]
         if not mask.any():
             continue
-        near = mask.copy()
-        for _ in range(3):
-            grown = near.copy()
-            grown[1:] |= near[:-1]
-            grown[:-1] |= near[1:]
-            grown[:, 1:] |= near[:, :-1]
-            grown[:, :-1] |= near[:, 1:]
-            near = grown
-        ring = near & (instance_id == 0)
+        ring = dilate(mask, 3) & (instance_id == 0)
         y_obj = float(y[mask].mean())
         y_ring = float(y[ring].mean()) if ring.any() else float("nan")
         contrast = abs(y_obj - y_ring) / y_ring if ring.any() and y_ring > 1e-6 else float("nan")

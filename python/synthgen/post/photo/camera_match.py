@@ -28,7 +28,7 @@ from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 
-from .measure import (_inner, fit_noise, flat_mask, linear, noise_sigma, ring_statistics,  # noqa: F401
+from .measure import (_inner, dilate, fit_noise, flat_mask, linear, noise_sigma, ring_statistics,  # noqa: F401
                       sharpness, srgb)
 
 __all__ = ["fit_noise", "noise_sigma", "flat_mask", "sharpness", "gaussian_blur", "match_blur", "vignette",
@@ -200,14 +200,7 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
     focal = max(w, h) if focal is None else focal
     info: Dict[str, Any] = {}
     out = np.array(composite, np.float32)
-    grow = influence.copy()
-    for _ in range(3):  # the blur and the lens effects spread the objects a little
-        g = grow.copy()
-        g[1:] |= grow[:-1]
-        g[:-1] |= grow[1:]
-        g[:, 1:] |= grow[:, :-1]
-        g[:, :-1] |= grow[:, 1:]
-        grow = g
+    grow = dilate(influence, 3)  # the blur and the lens effects spread the objects a little
     if denoise and synthetic is not None and ids is not None and (synthetic > 0.999).any():
         before, _ = noise_sigma(srgb(out), synthetic > 0.999)
         out = denoise_objects(out, synthetic > 0.999, ids, albedo, normal)

@@ -6,7 +6,8 @@ inserted objects (pure functions on arrays; images in [0, 1], the space they are
 * :func:`noise_sigma` -- one region's noise (robust second differences);
 * :func:`flat_mask` -- where a render is flat (albedo and normal), so what varies is noise;
 * :func:`sharpness` -- gradient / contrast of the strong step edges;
-* :func:`ring_statistics` -- an inserted object's noise and the sharpness around it against the photo's.
+* :func:`ring_statistics` -- an inserted object's noise and the sharpness around it against the photo's;
+* :func:`dilate` -- a mask grown by some pixels.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from typing import Any, Dict, Optional, Tuple
 
 import numpy as np
 
-__all__ = ["fit_noise", "noise_sigma", "flat_mask", "sharpness", "ring_statistics", "srgb", "linear"]
+__all__ = ["fit_noise", "noise_sigma", "flat_mask", "sharpness", "ring_statistics", "srgb", "linear", "dilate"]
 
 _MAD = 1.4826  # NOTE: sigma = 1.4826 MAD for a normal distribution
 
@@ -201,6 +202,19 @@ def sharpness(img: np.ndarray, mask: Optional[np.ndarray] = None) -> float:
         return float("nan")
     v = np.concatenate(vals)
     return float(np.mean(v)) if v.size >= 5 else float("nan")
+
+
+def dilate(m: np.ndarray, steps: int) -> np.ndarray:
+    """``m`` grown by ``steps`` pixels (4-neighbourhood dilation, repeated)."""
+    grown = np.asarray(m, bool).copy()
+    for _ in range(int(steps)):
+        g = grown.copy()
+        g[1:] |= grown[:-1]
+        g[:-1] |= grown[1:]
+        g[:, 1:] |= grown[:, :-1]
+        g[:, :-1] |= grown[:, 1:]
+        grown = g
+    return grown
 
 
 def _inner(m: np.ndarray) -> np.ndarray:
