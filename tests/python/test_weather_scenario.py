@@ -45,8 +45,9 @@ def test_fog_labels_transmittance_and_contrast(tmp_path):
     checked = 0
     for k in range(3):
         meta = json.load(open(os.path.join(out, "meta", f"{k:06d}.json")))
-        w = meta["weather"]
-        assert w["kind"] == "fog" and 20 <= w["visibility"] <= 40 and w["top"] == 10.0
+        assert list(meta["weather"]) == ["fog"]
+        w = meta["weather"]["fog"]
+        assert 20 <= w["visibility"] <= 40 and w["top"] == 10.0
         beta = 3.912 / w["visibility"]
         depth = _read(os.path.join(out, "depth", f"{k:06d}.exr"))[..., 0].astype(np.float64)
         ids = _read(os.path.join(out, "instance", f"{k:06d}.png"), oiio.UINT16)[..., 0]

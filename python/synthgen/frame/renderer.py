@@ -18,6 +18,7 @@ import numpy as np
 
 from .._core import Scene, SynthgenError
 from .. import post, randomize
+from ..randomize import weather
 from ..outputs.render import camera_meta
 from ..scenario import Scenario, frame_rng, sample_frame
 from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
@@ -230,10 +231,7 @@ class FrameRenderer:
             photo_info = dict(photo_info or {})
             photo_info["dome"] = self._add_dome(fp, camera, keep, objects, render_seed)
         self.scene.set_camera(camera)
-        if spec.weather is not None:
-            self.scene.set_medium("homogeneous", dict(spec.weather[1]))
-        elif self.scene.medium_type() is not None:
-            self.scene.clear_medium()
+        weather_ctx = self._apply_weather(spec, fp)
         self.scene.commit()
         from ..post.quality import exposure_scale
 
@@ -265,6 +263,8 @@ class FrameRenderer:
                     keep[k] = False
                     layout.dropped[k] = "hidden by a real occluder of the photo"
             photo_meta.update(photo_info or {})
+        for key, params in spec.weather:  # image-space weather (rain, fog on photos) before the post steps
+            arrays = weather.condition(key).post(weather_ctx[key], arrays, params)
         if spec.post:
             arrays = post.apply_steps(arrays, [(p.type, p.params) for p in spec.post])
         meta = {
@@ -279,8 +279,9 @@ class FrameRenderer:
             # The render's estimated error against its converged image (from its half-sample
             # images; after the scene's exposure): synthgen.post.quality.
             "noise": self._noise(res, spec.post),
-            # The frame's fog or haze (docs/weather.md): the medium's parameters, or none.
-            "weather": ({"kind": spec.weather[0], **spec.weather[1]} if spec.weather is not None else None),
+            # The frame's weather (docs/weather.md): {condition: its parameters}, or none.
+            "weather": ({key: {**params, **(weather_ctx[key].extra)} for key, params in spec.weather}
+                        if spec.weather else None),
             # Which image rgb is: the render's mean ("raw") or the denoiser's output ("denoised").
             "rgb": "denoised" if rs["denoise"] else "raw",
             # What this frame shares with others, for the train/val split (outputs.split): its
@@ -308,9 +309,11 @@ class FrameRenderer:
 
                 rec["lamps"] = dict(rec["lamps"], image=project_lamps(
                     rec["lamps"], objects[k].shape.lamps, objects[k].world, camera, arrays.get("depth")))
-        if spec.weather is not None:
-            _weather_labels(meta["objects"], self.scene.camera_transmittance(np.asarray(res.distance)),
-                            arrays["rgb"], arrays["instance_id"])
+        transmittance = next((c.transmittance for c in weather_ctx.values() if c.transmittance is not None), None)
+        if transmittance is None and self.scene.medium_type() is not None:
+            transmittance = self.scene.camera_transmittance(np.asarray(res.distance))
+        if transmittance is not None:
+            _weather_labels(meta["objects"], transmittance, arrays["rgb"], arrays["instance_id"])
         if fp is None and photo_meta is not None:
             meta["background"] = photo_meta
         if fp is not None:
@@ -324,6 +327,18 @@ class FrameRenderer:
         if fp is not None:  # compositing, camera matching and labels of a photo frame
             timings["photo_s"] = time.perf_counter() - t_render
         return arrays, meta, timings
+
+    def _apply_weather(self, spec: FrameSpec, fp: Any) -> Dict[str, "weather.WeatherContext"]:
+        """The frame's weather conditions applied to the scene (the previous frame's medium
+        removed first); {condition key: its context} for their image-space steps and meta."""
+        if self.scene.medium_type() is not None:
+            self.scene.clear_medium()
+        out = {}
+        for key, params in spec.weather:
+            ctx = weather.WeatherContext(self, weather.condition_rng(self.sc.seed, spec.frame, key), fp)
+            ctx.extra.update(weather.condition(key).apply(ctx, params) or {})
+            out[key] = ctx
+        return out
 
     @staticmethod
     def _noise(res: Any, post_steps: Any) -> Optional[Dict[str, float]]:

@@ -97,7 +97,7 @@ class Randomizer:
 _REGISTRY: Dict[str, Randomizer] = {}
 
 #: Modules of this package that are not randomizers.
-INFRASTRUCTURE: Tuple[str, ...] = ()
+INFRASTRUCTURE: Tuple[str, ...] = ("weather",)  # weather: the frame's conditions, a package of its own
 
 
 def register(r: Randomizer) -> Randomizer:

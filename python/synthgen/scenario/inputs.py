@@ -165,6 +165,7 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
     if ground["enabled"]:
         c.plugin("material", ground["material"], ground.locs.get("material", ground.loc))
     c.objects(spec["objects"])
+    _check_weather(sc, spec)
     if spec.get("background") is not None:
         from ..background.photoset import PhotoSet
 
@@ -175,13 +176,6 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
             raise SceneFileError(sc.source, rl.line, rl.column, rl.path,
                                  "not available with photo backgrounds yet: their composite is "
                                  "built from the differential buffers, which the denoiser does not filter")
-        weather = spec["weather"]
-        for kind in ("fog", "haze"):
-            if weather.get(kind) is not None:
-                wl = weather.locs.get(kind, weather.loc)
-                raise SceneFileError(sc.source, wl.line, wl.column, wl.path,
-                                     "not available with photo backgrounds yet: the photo has no fog of its own "
-                                     "(fog on photos, from their depth, is to come: docs/weather.md)")
         try:
             ps = PhotoSet(bg, sc.base_dir, sc.seed)
             ps.check_count(int(spec["count"]))
@@ -196,3 +190,19 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
     for kind, _ in c.seen:
         kinds[kind] = kinds.get(kind, 0) + 1
     return kinds
+
+
+def _check_weather(sc: Scenario, spec: Validated) -> None:
+    """Each weather condition's demands on the scenario, reported at its key."""
+    from ..randomize import weather
+
+    w = spec["weather"]
+    for c in weather.conditions():
+        if w.get(c.key) is None:
+            continue
+        wl = w.locs.get(c.key, w.loc)
+
+        def fail(message: str, wl: Loc = wl) -> None:
+            raise SceneFileError(sc.source, wl.line, wl.column, wl.path, message)
+
+        c.check(w[c.key], spec, fail)

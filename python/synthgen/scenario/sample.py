@@ -15,6 +15,7 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from .. import randomize
+from ..randomize.weather import sample as sample_weather
 from ..schema import distributions as D
 from ..schema.plugins import given_params
 from .load import Scenario, support_of
@@ -107,8 +108,9 @@ class FrameSpec:
     post: List[PluginSpec] = field(default_factory=list)
     #: A negative frame: its labelled objects were left out (scenario negative_frames).
     negative: bool = False
-    #: The frame's weather: (kind -- "fog" or "haze" --, the medium's parameters), or None.
-    weather: Optional[Tuple[str, Dict[str, Any]]] = None
+    #: The frame's weather: [(condition key, its parameters)], at most one per group
+    #: (synthgen.randomize.weather), in the order they apply.
+    weather: List[Tuple[str, Dict[str, Any]]] = field(default_factory=list)
 
 
 #: The visibility limits an object entry may set for its instances.
@@ -156,7 +158,7 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
         for i, o in enumerate(objects):
             o.index = i
     steps = D.sample_tree(spec["post"], rng, "post", rec)
-    weather = _weather(spec["weather"], frame_rng(sc.seed, frame, 7), rec)
+    weather = sample_weather(spec["weather"], sc.seed, frame, rec)
     intrinsics = {k: float(camera[k]) for k in ("fx", "fy", "cx", "cy") if camera.get(k) is not None}
     return FrameSpec(
         frame=int(frame), seed=sc.seed,
@@ -167,15 +169,3 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
         objects=objects, sampled={k: D.plain(v) for k, v in rec.items()},
         post=[PluginSpec(str(p["type"]), {k: v for k, v in p.items() if k != "type"}) for p in steps],
         negative=negative, weather=weather)
-
-
-def _weather(w: Mapping[str, Any], rng: np.random.Generator, rec: Dict[str, Any]) -> Optional[Tuple[str, Dict[str, Any]]]:
-    """The frame's weather medium (a stream of its own: scenarios without weather draw the same
-    frames as before it existed): fog with its probability, else haze with its probability."""
-    for kind in ("fog", "haze"):
-        spec = w.get(kind)
-        if spec is None or not float(rng.random()) < float(spec["probability"]):
-            continue
-        v = D.sample_tree({k: spec[k] for k in ("visibility", "top", "albedo", "g")}, rng, f"weather.{kind}", rec)
-        return kind, {k: float(v[k]) for k in ("visibility", "top", "albedo", "g")}
-    return None

@@ -14,6 +14,7 @@ from typing import Any
 
 from .. import outputs, post, randomize
 from ..outputs import split
+from ..randomize import weather
 from ..schema.errors import Loc, ValidationContext, show_value
 from ..schema.fields import (EMPTY, REQUIRED, Bool, Choice, Field, FilePath, Integer, ListOf, Number, Record, String,
                              Vector)
@@ -184,26 +185,8 @@ POST_STEP = Record({"type": Choice([s.name for s in post.steps()], doc="post-pro
                    variants={s.name: randomized(s.schema) for s in post.steps()}, doc="a post-processing step")
 
 
-def _weather_medium(visibility: float, top: float, albedo: float, g: float, doc: str) -> Record:
-    """One weather medium (the `homogeneous` medium plugin, medium/homogeneous.cpp), each value
-    also a distribution."""
-    return Record({
-        "probability": Number(1.0, min=0.0, max=1.0, doc="chance that a frame has it"),
-        "visibility": R(Number(visibility, min=0.0, min_open=True,
-                               doc="meteorological visibility in metres (contrast 2% at this distance: extinction "
-                                   "3.912 / visibility)")),
-        "top": R(Number(top, doc="height of the layer's top in metres (clear air above)")),
-        "albedo": R(Number(albedo, min=0.0, max=1.0, doc="single-scattering albedo")),
-        "g": R(Number(g, min=-0.99, max=0.99, doc="Henyey-Greenstein asymmetry (> 0: forward scattering)")),
-    }, default=None, doc=doc)
-
-
-#: Weather (docs/weather.md): a participating medium per frame. Fog first: a frame without fog
-#: may get haze.
-WEATHER = Record({
-    "fog": _weather_medium(150.0, 40.0, 0.95, 0.75, "fog: water droplets in a layer near the ground"),
-    "haze": _weather_medium(4000.0, 800.0, 0.9, 0.7, "haze: aerosols in a deep layer (far objects fade)"),
-}, default=EMPTY, doc="weather: fog or haze (a homogeneous medium; docs/weather.md)")
+#: Weather (docs/weather.md): the conditions of synthgen.randomize.weather, one key each.
+WEATHER = weather.schema()
 
 
 class _Resolution(Field):
