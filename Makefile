@@ -55,4 +55,4 @@ build: $(BUILD)/CMakeCache.txt
 install: build .stamp-install
 
 clean:
-	rm -rf $(BUILD) .stamp-install python/synthgen/_core*.so python/synthgen/libsynthgen_oiio.so python/synthgen/synthgen-reader
+	rm -rf $(BUILD) .stamp-install python/synthgen/_core*.so python/synthgen/libsynthgen_oiio.so python/synthgen/libsynthgen_vdb.so python/synthgen/synthgen-reader
