@@ -199,9 +199,11 @@ PYBIND11_MODULE(_core, m) {
   m.def("vdb_supported", &vdb_supported, "Whether this build reads and writes OpenVDB (.vdb) files.");
   m.def(
       "write_vdb_grid",
-      [](const std::string& path, const std::string& name, py::array_t<float, py::array::c_style | py::array::forcecast> a,
-         std::array<float, 3> lo, std::array<float, 3> hi) {
-        if (a.ndim() != 3) throw Error("write_vdb_grid: expected a 3D array (z, y, x), got " + std::to_string(a.ndim()) + "D");
+      [](const std::string& path, const std::string& name,
+         py::array_t<float, py::array::c_style | py::array::forcecast> a, std::array<float, 3> lo,
+         std::array<float, 3> hi) {
+        if (a.ndim() != 3)
+          throw Error("write_vdb_grid: expected a 3D array (z, y, x), got " + std::to_string(a.ndim()) + "D");
         DenseGrid g;
         g.nz = int(a.shape(0));
         g.ny = int(a.shape(1));

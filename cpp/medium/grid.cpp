@@ -57,7 +57,8 @@ class VoxelGrid final : public TrackedMedium {
 
  private:
   static float min_voxel(const DenseGrid& g) {
-    return std::min({(g.hi.x - g.lo.x) / float(g.nx), (g.hi.y - g.lo.y) / float(g.ny), (g.hi.z - g.lo.z) / float(g.nz)});
+    return std::min(
+        {(g.hi.x - g.lo.x) / float(g.nx), (g.hi.y - g.lo.y) / float(g.ny), (g.hi.z - g.lo.z) / float(g.nz)});
   }
   DensityBounds bounds(const Vec3f& lo, const Vec3f& hi) const {
     // The voxels whose centres' interpolation reaches the cell: one more on each side (a margin

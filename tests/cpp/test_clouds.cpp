@@ -20,7 +20,8 @@ TEST(clouds, layer_shape_and_coverage) {
   double mean[10] = {};
   for (int h = 0; h < 10; ++h)
     for (int i = 0; i < 100; ++i)
-      for (int k = 0; k < 100; ++k) mean[h] += c.density({-390.f + 7.8f * i, 100.f + 10.f * h + 0.01f, -390.f + 7.8f * k}) / 1e4;
+      for (int k = 0; k < 100; ++k)
+        mean[h] += c.density({-390.f + 7.8f * i, 100.f + 10.f * h + 0.01f, -390.f + 7.8f * k}) / 1e4;
   std::printf("clouds: mean density by tenth of the layer:");
   for (double v : mean) std::printf(" %.3f", v);
   std::printf("\n");
