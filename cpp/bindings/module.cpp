@@ -1,4 +1,5 @@
 // pybind11 bindings: synthgen._core. Names mirror the C++ API (snake_case).
+#include <array>
 #include <map>
 
 #include <pybind11/numpy.h>
@@ -10,6 +11,7 @@
 #include "core/plugin.h"
 #include "bindings/convert.h"
 #include "io/image_io.h"
+#include "io/vdb_io.h"
 
 namespace py = pybind11;
 using namespace sg;
@@ -194,6 +196,26 @@ PYBIND11_MODULE(_core, m) {
     }
   });
 
+  m.def("vdb_supported", &vdb_supported, "Whether this build reads and writes OpenVDB (.vdb) files.");
+  m.def(
+      "write_vdb_grid",
+      [](const std::string& path, const std::string& name,
+         py::array_t<float, py::array::c_style | py::array::forcecast> a, std::array<float, 3> lo,
+         std::array<float, 3> hi) {
+        if (a.ndim() != 3)
+          throw Error("write_vdb_grid: expected a 3D array (z, y, x), got " + std::to_string(a.ndim()) + "D");
+        DenseGrid g;
+        g.nz = int(a.shape(0));
+        g.ny = int(a.shape(1));
+        g.nx = int(a.shape(2));
+        g.lo = Vec3f(lo[0], lo[1], lo[2]);
+        g.hi = Vec3f(hi[0], hi[1], hi[2]);
+        g.values.assign(a.data(), a.data() + a.size());
+        write_vdb_grid(path, name, g);
+      },
+      py::arg("path"), py::arg("grid_name"), py::arg("density"), py::arg("bounds_min"), py::arg("bounds_max"),
+      "Writes a density array (z, y, x: x fastest) as the float grid `grid_name` of a new .vdb file\n"
+      "over the world box [bounds_min, bounds_max] (for the 'grid' medium; non-zero voxels active).");
   m.def("plugin_kinds", []() { return Registry::instance().kinds(); },
         "Plugin kinds of the registry: camera, light, material, render, texture.");
   m.def("plugin_names", [](const std::string& kind) { return Registry::instance().names(kind); }, py::arg("kind"),

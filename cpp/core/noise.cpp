@@ -122,6 +122,50 @@ float NoiseBasis::perlin_grad(const Vec3f& pt, Vec3f* grad) const {
   return k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
 }
 
+void NoiseBasis::perlin_range(const Vec3f& lo, const Vec3f& hi, float* mn, float* mx, int max_cells) const {
+  // NOTE: inside one lattice cell, perlin() is nested lerps -- convex combinations, the fade
+  // weights lying in [0, 1] -- of the eight corner functions g_c . (x - c), each linear in x. So its
+  // value lies between the smallest and the largest corner function at x, and over a box between
+  // the smallest minimum and the largest maximum of the corner functions over the box, which are
+  // at the box's corners (a linear function's extremes; interval arithmetic, Moore 1966). The
+  // clamp to [-1, 1] keeps these bounds.
+  const int X0 = fast_floor(lo.x), Y0 = fast_floor(lo.y), Z0 = fast_floor(lo.z);
+  const int X1 = fast_floor(hi.x), Y1 = fast_floor(hi.y), Z1 = fast_floor(hi.z);
+  const int64_t cells = int64_t(X1 - X0 + 1) * int64_t(Y1 - Y0 + 1) * int64_t(Z1 - Z0 + 1);
+  if (!(cells >= 1 && cells <= max_cells)) {
+    *mn = -1.f;
+    *mx = 1.f;
+    return;
+  }
+  const auto& P = m_perm;
+  float lo_v = k_inf, hi_v = -k_inf;
+  for (int X = X0; X <= X1; ++X)
+    for (int Y = Y0; Y <= Y1; ++Y)
+      for (int Z = Z0; Z <= Z1; ++Z) {
+        // The part of the box in this cell, in the cell's local coordinates [0, 1]^3.
+        const Vec3f b0(std::max(lo.x - float(X), 0.f), std::max(lo.y - float(Y), 0.f), std::max(lo.z - float(Z), 0.f));
+        const Vec3f b1(std::min(hi.x - float(X), 1.f), std::min(hi.y - float(Y), 1.f), std::min(hi.z - float(Z), 1.f));
+        for (int c = 0; c < 8; ++c) {
+          const int i = c & 1, j = (c >> 1) & 1, k = c >> 2;
+          // The corner's gradient as perlin() finds it (the permutation table is doubled, so
+          // P[a + 256] = P[a] and the wrapped indices below agree with its sums).
+          const int h = P[size_t(P[size_t(P[size_t((X + i) & 255)] + ((Y + j) & 255))] + ((Z + k) & 255))];
+          const Vec3f g = grad3_vec(h);
+          const Vec3f corner{float(i), float(j), float(k)};
+          float fmax = 0.f, fmin = 0.f;
+          for (int a = 0; a < 3; ++a) {
+            const float e0 = g[a] * (b0[a] - corner[a]), e1 = g[a] * (b1[a] - corner[a]);
+            fmax += std::max(e0, e1);
+            fmin += std::min(e0, e1);
+          }
+          hi_v = std::max(hi_v, fmax);
+          lo_v = std::min(lo_v, fmin);
+        }
+      }
+  *mn = std::max(-1.f, std::min(1.f, lo_v));
+  *mx = std::max(-1.f, std::min(1.f, hi_v));
+}
+
 float NoiseBasis::perlin2(float px, float py) const {
   int X = fast_floor(px), Y = fast_floor(py);
   float x = px - float(X), y = py - float(Y);
@@ -225,6 +269,22 @@ float fbm_grad(const NoiseBasis& b, const Vec3f& p, const Fractal& f, float foot
 
 float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const Fractal& f, float footprint, Vec3f* grad) {
   return fractal<true, true>(b, NoiseKind::Perlin, p, f, footprint, grad);
+}
+
+void fbm_range(const NoiseBasis& b, const Vec3f& lo, const Vec3f& hi, const Fractal& f, float* mn, float* mx) {
+  float s_lo = 0.f, s_hi = 0.f;
+  for (int i = 0; i < f.octaves(); ++i) {
+    const float s = f.frequency(i), w = f.weight(i);
+    // The octave's lattice coordinates as fractal() computes them (rounding is monotonic, so the
+    // box maps into this box).
+    const Vec3f off = Vec3f(17.3f, -41.7f, 29.1f) * float(i);
+    float a, c;
+    b.perlin_range(lo * s + off, hi * s + off, &a, &c);
+    s_lo += w * a;
+    s_hi += w * c;
+  }
+  *mn = s_lo * f.norm();
+  *mx = s_hi * f.norm();
 }
 
 float fbm(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Fractal& f, float footprint) {

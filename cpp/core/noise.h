@@ -20,6 +20,10 @@ class NoiseBasis {
   float perlin(const Vec3f& p) const;
   /// perlin() and its gradient (analytic, without the final clamp to [-1, 1]).
   float perlin_grad(const Vec3f& p, Vec3f* grad) const;
+  /// Conservative bounds [*mn, *mx] of perlin() over the box [lo, hi] (exact up to rounding for a
+  /// box inside one lattice cell, looser across cells); [-1, 1] when the box spans more than
+  /// `max_cells` lattice cells.
+  void perlin_range(const Vec3f& lo, const Vec3f& hi, float* mn, float* mx, int max_cells = 64) const;
   /// 2D Perlin noise in [-1, 1] (gradients on the unit circle).
   float perlin2(float x, float y) const;
   /// Value noise in [-1, 1]: random lattice values, quintic interpolation.
@@ -90,6 +94,9 @@ float turbulence(const NoiseBasis& b, NoiseKind kind, const Vec3f& p, const Frac
 /// fbm / turbulence (Perlin basis) with their analytic gradient in the units of p.
 float fbm_grad(const NoiseBasis& b, const Vec3f& p, const Fractal& f, float footprint, Vec3f* grad);
 float turbulence_grad(const NoiseBasis& b, const Vec3f& p, const Fractal& f, float footprint, Vec3f* grad);
+/// Conservative bounds [*mn, *mx] of fbm(b, NoiseKind::Perlin, p, f) (no footprint) for p in the
+/// box [lo, hi]: the sum of each octave's perlin_range (for majorants of media, medium/tracking.h).
+void fbm_range(const NoiseBasis& b, const Vec3f& lo, const Vec3f& hi, const Fractal& f, float* mn, float* mx);
 /// Fade weight of an octave of frequency `freq` for a footprint (1 = kept, 0 = removed).
 float octave_fade(float freq, float footprint);
 /// Mean of |noise| over space (used for faded turbulence octaves).

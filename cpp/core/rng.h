@@ -191,8 +191,12 @@ class PixelSampler {
 
   /// An unstratified value for dimension `dim` (a plain hash; for decisions such as
   /// Russian roulette that gain nothing from stratification and are on the hot path).
-  float get_independent(uint32_t dim) const {
-    return bits_to_unit_float(uint32_t(mix64(m_key ^ (uint64_t(m_sample) << 32) ^ (0x51ed27u + dim)) >> 32));
+  float get_independent(uint32_t dim) const { return bits_to_unit_float(uint32_t(independent_key(dim) >> 32)); }
+
+  /// The 64-bit hash behind get_independent(dim) (its value is the high 24 bits): a key for a
+  /// stream of further numbers drawn from one dimension (MediumRng, medium/medium.h).
+  uint64_t independent_key(uint32_t dim) const {
+    return mix64(m_key ^ (uint64_t(m_sample) << 32) ^ (0x51ed27u + dim));
   }
 
   /// Dimensions (dim, dim + 1) for an even `dim`: one 2D point of the pair's net.

@@ -29,6 +29,11 @@ constexpr int k_shadow_slots = 2 * RenderScene::k_light_groups;
 /// First sample dimension (unstratified) of decoupled next-event estimation in a medium, per
 /// vertex: +0 the point, then per light group +1 the choice and +2, +3 the light sample.
 constexpr uint32_t k_medium_nee_dims = 0x30000u;
+/// First sample dimension of the transmittance estimates (ratio tracking) of shadow rays through a
+/// heterogeneous medium: + bounce * k_shadow_slots + the shadow slot; each dimension keys a stream
+/// (MediumRng). The free flight (+7 of a vertex) and the decoupled point (k_medium_nee_dims) key
+/// their own streams the same way.
+constexpr uint32_t k_medium_shadow_dims = 0x38000u;
 
 struct PathCounters {
   uint64_t rays = 0;

@@ -219,7 +219,7 @@ class PathTracer {
         Color f = mat->eval_pdf(si, wo, ls.wi, &bsdf_pdf);
         if (is_black(f)) continue;
         const Ray& sh = shadow[g] = shadow_ray_to(offset_ray_origin(si.p, si.p_error, si.ng, ls.wi), ls);
-        const float tr = m_volume.transmittance(sh);
+        const float tr = m_volume.transmittance(sh, sampler, st.bounce, g);
         if (!(tr > 0.f)) continue;
         float light_pdf = pick_pmf * ls.pdf;
         float w = ls.delta ? 1.f : power_heuristic(light_pdf, bsdf_pdf);

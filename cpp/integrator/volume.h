@@ -20,9 +20,12 @@ class VolumeTracer {
   VolumeTracer(const RenderScene& scene, const RenderSettings& settings, float clamp)
       : m_scene(scene), m_s(settings), m_clamp(clamp) {}
 
-  /// Transmittance of the global medium along a shadow ray (1 without one).
-  float transmittance(const Ray& r) const {
-    return m_scene.medium ? m_scene.medium->transmittance(r.o, r.d, r.t_max) : 1.f;
+  /// Transmittance of the global medium along a shadow ray (1 without one): exact, or an unbiased
+  /// estimate (ratio tracking) from the stream of the vertex's shadow slot.
+  float transmittance(const Ray& r, const PixelSampler& sampler, uint32_t bounce, int slot) const {
+    if (!m_scene.medium) return 1.f;
+    MediumRng rng(sampler.independent_key(k_medium_shadow_dims + bounce * uint32_t(k_shadow_slots) + uint32_t(slot)));
+    return m_scene.medium->transmittance_estimate(r.o, r.d, r.t_max, rng);
   }
 
   /// A free flight through the global medium along the current ray, up to `t_end` (its hit, or
@@ -30,15 +33,16 @@ class VolumeTracer {
   /// weight is the medium's albedo at an event and 1 when the flight passes (medium.h).
   bool event(const PathState& st, float t_end, const PixelSampler& sampler, float* t) const {
     if (!m_scene.medium) return false;
-    const float u = sampler.get_independent(2 + st.bounce * k_dims_per_vertex + 7);
-    return m_scene.medium->sample_distance(st.ray.o, st.ray.d, t_end, u, t);
+    MediumRng rng(sampler.independent_key(2 + st.bounce * k_dims_per_vertex + 7));
+    return m_scene.medium->sample_distance(st.ray.o, st.ray.d, t_end, rng, t);
   }
 
   /// Decoupled next-event estimation in the medium along the current segment [0, t_end): the
   /// light scattered towards the path at a point drawn from the free-flight density conditioned
   /// on scattering within the segment, one light of each group, weighted by the probability of
   /// scattering at all (1 - T). Fills shadow[g] / st.shadow_contrib[k_light_groups + g]; returns
-  /// the mask of the groups it filled.
+  /// the mask of the groups it filled. In a heterogeneous medium the point and its weight come
+  /// from tracking (Medium::sample_in_segment): the same estimator in expectation.
   /// NOTE: the expectation equals next-event estimation at the vertex where the free flight
   /// scatters (which then does none), but every segment gets an estimate instead of the
   /// fraction 1 - T that scatters: far less noise in the single-scattered light (the "decoupled"
@@ -51,8 +55,8 @@ class VolumeTracer {
     if (!sc.medium || sc.lights.empty() || !m_s.next_event || st.medium_bounces >= m_s.max_medium_depth) return 0;
     const uint32_t dim = k_medium_nee_dims + st.bounce * 8u;
     float t, p_scatter;
-    if (!sc.medium->sample_in_segment(st.ray.o, st.ray.d, t_end, sampler.get_independent(dim), &t, &p_scatter))
-      return 0;
+    MediumRng rng(sampler.independent_key(dim));
+    if (!sc.medium->sample_in_segment(st.ray.o, st.ray.d, t_end, rng, &t, &p_scatter)) return 0;
     const Medium& medium = *sc.medium;
     const Vec3f p = st.ray.o + st.ray.d * t;
     const Vec3f wo = -normalize(st.ray.d);
@@ -73,7 +77,7 @@ class VolumeTracer {
       const float f = phase.eval(wo, ls.wi);
       if (!(f > 0.f)) continue;
       const Ray& sh = shadow[g] = shadow_ray_to(p, ls);
-      const float tr = transmittance(sh);
+      const float tr = transmittance(sh, sampler, st.bounce, RenderScene::k_light_groups + g);
       if (!(tr > 0.f)) continue;
       const float light_pdf = pick_pmf * ls.pdf;
       // NOTE: MIS weights from the directions' densities alone (light vs phase sampling); the

@@ -37,9 +37,10 @@ class HomogeneousLayer final : public Medium {
     return std::isfinite(len) ? std::exp(-m_sigma_t * len) : 0.f;
   }
 
-  bool sample_distance(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t) const override {
+  bool sample_distance(const Vec3f& o, const Vec3f& d, float t_max, MediumRng& rng, float* t) const override {
     float t0, t1;
     if (!(m_sigma_t > 0.f) || !inside(o, d, t_max, &t0, &t1)) return false;
+    const float u = rng.next();
     // The path length inside the layer to the event: exponential with rate sigma_t.
     const float s = -std::log1p(-std::min(u, 0x1.fffffep-1f)) / m_sigma_t;
     const float dt = s / length(d);
@@ -48,10 +49,11 @@ class HomogeneousLayer final : public Medium {
     return true;
   }
 
-  bool sample_in_segment(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t,
+  bool sample_in_segment(const Vec3f& o, const Vec3f& d, float t_max, MediumRng& rng, float* t,
                          float* p_scatter) const override {
     float t0, t1;
     if (!(m_sigma_t > 0.f) || !inside(o, d, t_max, &t0, &t1)) return false;
+    const float u = rng.next();
     const float len = length(d);
     // NOTE: inverting the exponential truncated to the segment's length L inside the layer:
     // s = -ln(1 - u (1 - exp(-sigma L))) / sigma; -expm1 keeps 1 - exp accurate for thin media.

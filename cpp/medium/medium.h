@@ -17,6 +17,7 @@
 
 #include "core/math.h"
 #include "core/params.h"
+#include "core/rng.h"
 
 namespace sg {
 
@@ -56,23 +57,56 @@ struct HenyeyGreenstein {
   }
 };
 
+/// A deterministic stream of uniform numbers in [0, 1) for one query of a medium: delta and ratio
+/// tracking draw as many as their tentative collisions need. A counter-based hash of a 64-bit key
+/// (PixelSampler::independent_key of one sample dimension): a pure function of (key, index), so
+/// renders stay bit-identical for any thread count. Its first number is the key's own high bits,
+/// i.e. exactly PixelSampler::get_independent of that dimension: a medium that needs one number
+/// (the homogeneous one) sees what it saw before streams existed.
+class MediumRng {
+ public:
+  explicit MediumRng(uint64_t key) : m_key(key) {}
+  float next() {
+    // NOTE: SplitMix64's finalizer of key xor a Weyl sequence (Steele, Lea, Flood 2014): each
+    // index gives an independent-looking hash; index 0 is the key itself (see the class doc).
+    const uint64_t h = m_index ? mix64(m_key ^ (m_index * 0xd1b54a32d192ed03ull)) : m_key;
+    ++m_index;
+    return bits_to_unit_float(uint32_t(h >> 32));
+  }
+
+ private:
+  uint64_t m_key;
+  uint64_t m_index = 0;
+};
+
 /// A participating medium. Rays are o + t d with any non-zero d (t in units of |d|).
+///
+/// Homogeneous media answer exactly (closed forms). Heterogeneous ones (medium/tracking.h) track
+/// against a majorant grid: free flights by delta tracking, transmittance by ratio tracking --
+/// unbiased estimates, drawn from a MediumRng.
 class Medium {
  public:
   virtual ~Medium() = default;
-  /// Transmittance exp(-optical depth) over the ray's parameters [0, t_max) (t_max may be inf).
+  /// Transmittance exp(-optical depth) over the ray's parameters [0, t_max) (t_max may be inf),
+  /// deterministic: exact, or a quadrature of the optical depth (heterogeneous media). For labels
+  /// and tests; rendering uses transmittance_estimate().
   virtual float transmittance(const Vec3f& o, const Vec3f& d, float t_max) const = 0;
-  /// Samples a free flight from o along d within [0, t_max) with u in [0, 1): returns true and
-  /// the ray parameter *t of a scattering event (density sigma_t T(t) along the path length),
-  /// false when the flight reaches t_max (probability T(t_max)). Either way the estimator's
-  /// weight is what weight_scatter() / 1 says: the ratios of contribution to probability.
-  virtual bool sample_distance(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t) const = 0;
-  /// Samples a scattering point along [0, t_max) with u in [0, 1) from the free-flight density
-  /// conditioned on scattering before t_max: returns false when the segment does not cross the
-  /// medium, else *t and *p_scatter = 1 - T(t_max), the probability of scattering at all (the
-  /// estimator's weight besides the albedo). For decoupled next-event estimation.
-  virtual bool sample_in_segment(const Vec3f& o, const Vec3f& d, float t_max, float u, float* t,
-                                 float* p_scatter) const = 0;
+  /// An unbiased estimate of the transmittance (shadow rays); the exact value where there is one.
+  virtual float transmittance_estimate(const Vec3f& o, const Vec3f& d, float t_max, MediumRng& rng) const {
+    return transmittance(o, d, t_max);
+  }
+  /// Samples a free flight from o along d within [0, t_max): returns true and the ray parameter
+  /// *t of a scattering event (density sigma_t T(t) along the path length), false when the flight
+  /// reaches t_max (probability T(t_max)). Either way the estimator's weight is what
+  /// albedo() / 1 says: the ratios of contribution to probability.
+  virtual bool sample_distance(const Vec3f& o, const Vec3f& d, float t_max, MediumRng& rng, float* t) const = 0;
+  /// Samples a scattering point along [0, t_max) for decoupled next-event estimation: returns
+  /// false when the segment does not cross the medium, else *t and *weight such that
+  /// E[weight f(t)] = integral over the segment of sigma_t(s) T(s) f(s) ds for any f (the
+  /// in-scattered light's estimator besides the albedo). Homogeneous: t from the free-flight
+  /// density conditioned on scattering before t_max, weight 1 - T(t_max).
+  virtual bool sample_in_segment(const Vec3f& o, const Vec3f& d, float t_max, MediumRng& rng, float* t,
+                                 float* weight) const = 0;
   /// sigma_s / sigma_t: the throughput's factor at a scattering event.
   virtual Color albedo() const = 0;
   /// The phase function at scattering events.

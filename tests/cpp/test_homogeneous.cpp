@@ -21,6 +21,9 @@ namespace {
 
 Vec3f to_f(const DVec3& v) { return Vec3f(float(v.x), float(v.y), float(v.z)); }
 DVec3 to_d(const Vec3f& v) { return {v.x, v.y, v.z}; }
+/// A medium's random stream whose first number is u (a multiple of 2^-24).
+MediumRng stream_from(float u) { return MediumRng((uint64_t(uint32_t(u * 0x1p24f)) << 8) << 32); }
+MediumRng stream_from(Pcg32& rng) { return MediumRng((uint64_t(rng.next_u32()) << 32) | rng.next_u32()); }
 
 std::shared_ptr<Medium> make_fog(double extinction, double top, double bottom = std::nan("")) {
   ParamSet p;
@@ -138,7 +141,8 @@ TEST(homogeneous, free_flight_distances_chi2_and_pass_probability) {
   std::vector<double> obs(bins + 1, 0.0);
   for (int i = 0; i < n; ++i) {
     float t;
-    if (fog->sample_distance(o, d, 30.f, rng.next_float(), &t)) {
+    MediumRng stream = stream_from(rng);
+    if (fog->sample_distance(o, d, 30.f, stream, &t)) {
       ASSERT_GE(t, t0 - 1e-4);
       ASSERT_LT(t, t1 + 1e-4);
       obs[std::min(bins - 1, int((t - t0) / (t1 - t0) * bins))] += 1.0;
@@ -193,7 +197,8 @@ TEST(homogeneous, points_in_a_segment_chi2_and_scatter_probability) {
   std::vector<double> obs(bins, 0.0);
   for (int i = 0; i < n; ++i) {
     float t, ps;
-    ASSERT_TRUE(fog->sample_in_segment(o, d, 30.f, rng.next_float(), &t, &ps));
+    MediumRng stream = stream_from(rng);
+    ASSERT_TRUE(fog->sample_in_segment(o, d, 30.f, stream, &t, &ps));
     ASSERT_NEAR(ps, p, 1e-5);
     ASSERT_GE(t, t0 - 1e-4);
     ASSERT_LE(t, t1 + 1e-4);
@@ -208,8 +213,9 @@ TEST(homogeneous, points_in_a_segment_chi2_and_scatter_probability) {
   EXPECT_TRUE(r.ok) << r.message;
   // A segment above the layer crosses no medium; an infinite one inside scatters for sure.
   float t, ps;
-  EXPECT_FALSE(fog->sample_in_segment({0, 11, 0}, {1, 0, 0}, k_inf, 0.5f, &t, &ps));
-  ASSERT_TRUE(fog->sample_in_segment({0, 1, 0}, {1, 0, 0}, k_inf, 0.5f, &t, &ps));
+  MediumRng half = stream_from(0.5f), half2 = stream_from(0.5f);
+  EXPECT_FALSE(fog->sample_in_segment({0, 11, 0}, {1, 0, 0}, k_inf, half, &t, &ps));
+  ASSERT_TRUE(fog->sample_in_segment({0, 1, 0}, {1, 0, 0}, k_inf, half2, &t, &ps));
   EXPECT_EQ(ps, 1.f);
   EXPECT_NEAR(t, std::log(2.0) / sigma, 1e-3);
 }

@@ -29,6 +29,7 @@ const std::map<std::string, std::string> k_not_plugins = {
     {"texture/image_cache.cpp", "decoded images shared by image textures"},
     {"texture/mipmap.cpp", "mip-map pyramids and filtered lookups"},
     {"light/light.cpp", "the Light interface and create_light"},
+    {"medium/tracking.cpp", "majorant grids and tracking shared by the heterogeneous media"},
     {"light/area.cpp", "area lights are made by the scene from emissive materials"},
     {"medium/medium.cpp", "the Medium interface and create_medium"},
     {"camera/camera.cpp", "PinholeCamera itself; its plugin declaration is camera/pinhole.cpp"},
