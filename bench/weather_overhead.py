@@ -1,16 +1,17 @@
 #!/usr/bin/env python3
 """Render time of the same street frames clear and in weather (docs/weather.md): frames of
-scenarios/weather.yaml rendered with its weather section replaced -- clear air, then
-homogeneous fog (visibility 100 m, a 40 m layer) -- alternating per frame, each render timed
-by the runner's own render stage (path tracing and the denoiser), medians over the frames and
-repeats. The last three lines are exactly
+scenarios/weather.yaml rendered with its weather section replaced -- clear air, homogeneous
+fog (visibility 100 m, a 40 m layer), heterogeneous ground fog (banks of visibility 40 m,
+scale height 3 m), night (street lights and the twilight sky's night) -- in turn per frame,
+each render timed by the runner's own render stage (path tracing and the denoiser), medians
+over the frames and repeats. The last three lines are exactly
 
     fog_overhead_pct=<float>
     ground_fog_overhead_pct=<float>
     night_overhead_pct=<float>
 
-(median fog time / median clear time - 1, in percent; `nan` where the weather does not exist
-yet: heterogeneous ground fog and night with lights are still to come in issue [6/9]).
+(median time in that weather / median clear time - 1, in percent; `nan` for a condition this
+build does not have).
 
     .venv/bin/python bench/weather_overhead.py [--frames 3] [--repeats 2] [--resolution 640 480] [--spp 32]
 """
@@ -27,6 +28,8 @@ sys.path.insert(0, os.path.join(REPO, "python"))
 
 SCENARIO = os.path.join(REPO, "scenarios", "weather.yaml")
 FOG = {"fog": {"visibility": 100.0, "top": 40.0}}
+GROUND_FOG = {"ground_fog": {"visibility": 40.0, "scale_height": 3.0}}
+NIGHT = {"night": {}}
 
 
 def main(argv=None) -> int:
@@ -40,29 +43,33 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=32)
     args = ap.parse_args(argv)
 
+    from synthgen.randomize import weather as W
+
+    known = {c.key for c in W.conditions()}
+    cases = [(name, w) for name, w in (("clear", {}), ("fog", FOG), ("ground_fog", GROUND_FOG), ("night", NIGHT))
+             if set(w) <= known]
     renderers = {}
-    for name, weather in (("clear", {}), ("fog", FOG)):
+    for name, weather in cases:
         sc = load_scenario(SCENARIO, overrides=[("weather", weather), ("resolution", list(args.resolution)),
                                                 ("render.spp", args.spp)])
         check_inputs(sc)
         renderers[name] = FrameRenderer(sc)
     print(f"scenario: {os.path.relpath(SCENARIO, REPO)} frames 0..{args.frames - 1}, "
           f"{args.resolution[0]}x{args.resolution[1]}, {args.spp} spp, render settings as the scenario's "
-          f"(denoised); fog: visibility {FOG['fog']['visibility']} m, layer top {FOG['fog']['top']} m")
-    times = {"clear": [], "fog": []}
+          f"(denoised); {FOG}, {GROUND_FOG}, {NIGHT}")
+    times = {name: [] for name, _ in cases}
     for rep in range(args.repeats):
         for k in range(args.frames):
-            for name in ("clear", "fog"):
+            for name, _ in cases:
                 _, meta, t = renderers[name].render(k)
                 times[name].append(t["render_s"])
                 print(f"repeat {rep} frame {k} {name:5s}: render {t['render_s']:.3f} s, weather {meta['weather']}",
                       flush=True)
     med = {k: statistics.median(v) for k, v in times.items()}
-    print(f"median render s: clear {med['clear']:.3f}, fog {med['fog']:.3f}")
-    print("ground fog (heterogeneous media) and night with lights: not implemented yet (nan)")
-    print(f"fog_overhead_pct={100.0 * (med['fog'] / med['clear'] - 1.0):.1f}")
-    print("ground_fog_overhead_pct=nan")
-    print("night_overhead_pct=nan")
+    print("median render s: " + ", ".join(f"{k} {v:.3f}" for k, v in med.items()))
+    for name in ("fog", "ground_fog", "night"):
+        pct = 100.0 * (med[name] / med["clear"] - 1.0) if name in med else float("nan")
+        print(f"{name}_overhead_pct={pct:.1f}")
     return 0
 
 

@@ -13,6 +13,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--spp", type=positive_int, default=32, help="samples per pixel of each tile (default 32)")
     p.add_argument("--car", metavar="FILE.png", help="also render the car row (the library car at dataset "
                                                      "resolution, clean and with each effect) into this file")
+    p.add_argument("--weather", metavar="FILE.png", help="also render the weather row (one frame of --scenario under "
+                                                         "each weather condition) into this file")
+    p.add_argument("--scenario", default=os.path.join("scenarios", "vehicles.yaml"),
+                   help="the weather row's street scenario (default scenarios/vehicles.yaml)")
+    p.add_argument("--frame", type=int, default=0, help="the weather row's frame of --scenario (default 0)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -23,6 +28,9 @@ def run(args: argparse.Namespace) -> int:
     if args.car:
         os.makedirs(os.path.dirname(os.path.abspath(args.car)), exist_ok=True)
         print(gallery.write_car_row(args.car, spp=args.spp))
+    if args.weather:
+        os.makedirs(os.path.dirname(os.path.abspath(args.weather)), exist_ok=True)
+        print(gallery.write_weather_row(args.weather, args.scenario, frame=args.frame, spp=args.spp))
     return EXIT_OK
 
 

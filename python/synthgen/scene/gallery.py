@@ -14,7 +14,8 @@ import numpy as np
 from . import plates, primitives as P, raster as R, signs, wear
 from .._core import PinholeCamera, Scene, TextureRef
 
-__all__ = ["EFFECTS", "OBJECTS", "CAR", "CAR_EFFECTS", "render_gallery", "render_car_row"]
+__all__ = ["EFFECTS", "OBJECTS", "CAR", "CAR_EFFECTS", "WEATHER_TILES", "render_gallery", "render_car_row",
+           "render_weather_row"]
 
 EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
     ("clean", {}),
@@ -187,6 +188,52 @@ def render_car_row(tile_w: int = 640, tile_h: int = 480, spp: int = 32) -> np.nd
         cap = np.where(cap <= 0.04045, cap / 12.92, ((cap + 0.055) / 1.055) ** 2.4)
         row.append(np.concatenate([tile, cap], axis=0))
     return np.concatenate(row, axis=1).astype(np.float32)
+
+
+#: The gallery's weather row (docs/weather.md): one frame of a street scenario under each
+#: condition of synthgen.randomize.weather, its parameters as a dataset would draw them.
+WEATHER_TILES: List[Tuple[str, Dict[str, Any]]] = [
+    ("clear", {}),
+    ("fog", {"fog": {"visibility": 120.0, "top": 30.0}}),
+    ("haze", {"haze": {"visibility": 3000.0, "top": 800.0}}),
+]
+
+
+def render_weather_row(scenario: str, frame: int = 0, tile_w: int = 480, tile_h: int = 360, spp: int = 32,
+                       tiles: Any = None) -> np.ndarray:
+    """The weather row (linear RGB): frame ``frame`` of ``scenario`` (its layout, camera and
+    objects) with its weather section replaced by each of :data:`WEATHER_TILES` in turn, a
+    caption under each tile."""
+    from ..frame.renderer import FrameRenderer
+    from ..scenario import check_inputs, load_scenario
+
+    row = []
+    for name, weather in (tiles or WEATHER_TILES):
+        sc = load_scenario(scenario, overrides=[("weather", weather), ("resolution", [tile_w, tile_h]),
+                                                ("render.spp", spp)])
+        check_inputs(sc)
+        arrays, meta, _ = FrameRenderer(sc).render(frame)
+        drawn = meta["weather"] or {}
+        ptxt = "; ".join(f"{k}: " + ", ".join(f"{p}={_short(v)}" for p, v in params.items())
+                         for k, params in drawn.items())
+        cap = _caption(f"{name}\n{ptxt}" if ptxt else name, tile_w, 32)
+        cap = np.where(cap <= 0.04045, cap / 12.92, ((cap + 0.055) / 1.055) ** 2.4)
+        row.append(np.concatenate([np.asarray(arrays["rgb"], np.float32)[..., :3], cap], axis=0))
+    return np.concatenate(row, axis=1).astype(np.float32)
+
+
+def _short(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.3g}"
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_short(x) for x in v) + "]"
+    return str(v)
+
+
+def write_weather_row(path: str, scenario: str, **kw: Any) -> str:
+    from ..outputs.files import write_srgb_png
+
+    return write_srgb_png(path, render_weather_row(scenario, **kw))
 
 
 def write_gallery(path: str, **kw: Any) -> str:

@@ -9,6 +9,13 @@ from ...schema.random import R
 from . import Condition, WeatherContext
 
 
+def refuse_photos(spec: Mapping[str, Any], fail: Any, what: str) -> None:
+    """A medium rendered around the inserted objects only would not match the photo."""
+    if spec.get("background") is not None:
+        fail(f"not available with photo backgrounds yet: the photo has no {what} of its own "
+             "(fog on photos, from their depth, is to come: docs/weather.md)")
+
+
 def layer_schema(visibility: float, top: float, albedo: float, g: float) -> Record:
     """The layer's parameters, each value also a distribution."""
     return Record({
@@ -27,9 +34,7 @@ class Layer(Condition):
     group = "medium"
 
     def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any) -> None:
-        if spec.get("background") is not None:
-            fail("not available with photo backgrounds yet: the photo has no fog of its own "
-                 "(fog on photos, from their depth, is to come: docs/weather.md)")
+        refuse_photos(spec, fail, "fog")
 
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
         return {k: float(value[k]) for k in ("visibility", "top", "albedo", "g")}
