@@ -199,18 +199,18 @@ WEATHER_TILES: List[Tuple[str, Dict[str, Any]]] = [
 ]
 
 
-def render_weather_row(scenario: str, frame: int = 0, tile_w: int = 480, tile_h: int = 360, spp: int = 32,
-                       tiles: Any = None) -> np.ndarray:
+def render_weather_row(scenario: str, frame: int = 0, tile_w: int = 480, tile_h: int = 360, spp: int = 64,
+                       tiles: Any = None, denoise: bool = True) -> np.ndarray:
     """The weather row (linear RGB): frame ``frame`` of ``scenario`` (its layout, camera and
-    objects) with its weather section replaced by each of :data:`WEATHER_TILES` in turn, a
-    caption under each tile."""
+    objects) with its weather section replaced by each of :data:`WEATHER_TILES` in turn
+    (denoised, as scenarios/weather.yaml renders), a caption under each tile."""
     from ..frame.renderer import FrameRenderer
     from ..scenario import check_inputs, load_scenario
 
     row = []
     for name, weather in (tiles or WEATHER_TILES):
         sc = load_scenario(scenario, overrides=[("weather", weather), ("resolution", [tile_w, tile_h]),
-                                                ("render.spp", spp)])
+                                                ("render.spp", spp), ("render.denoise", bool(denoise))])
         check_inputs(sc)
         arrays, meta, _ = FrameRenderer(sc).render(frame)
         drawn = meta["weather"] or {}
