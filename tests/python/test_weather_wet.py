@@ -294,3 +294,21 @@ def test_a_wet_model_keeps_each_of_its_materials(tmp_path):
     g = (ids == 0) & np.isfinite(dry["depth"])
     assert wet["rgb"][g].mean() != dry["rgb"][g].mean(), "the ground is wet too"
     assert meta["weather"]["wet"]["wetness"] == 1.0
+
+
+def test_wet_over_a_photo_wets_the_objects_not_the_photos_ground(tmp_path):
+    """Over a photo background the ground is the photo's (a shadow catcher): it stays as it is --
+    away from the inserted object the composite is the photo -- while the object gets its film."""
+    from test_augmented_photo import CALIBRATION, _photo, _scenario
+
+    d = tmp_path / "photos"
+    d.mkdir()
+    photo = _photo(str(d / "street.exr"))
+    (d / "calibration.yaml").write_text(CALIBRATION + "objects: []\n")
+    dry = sg.Scenario(_scenario(tmp_path, photos=str(d), count=1)).frame(0)
+    wet = sg.Scenario(_scenario(tmp_path, photos=str(d), count=1, extra="weather: {wet: {wetness: 1}}")).frame(0)
+    assert wet.meta["weather"]["wet"]["wetness"] == 1.0
+    assert np.array_equal(dry.instance_id, wet.instance_id)
+    assert np.all(wet.rgb == photo, axis=2).mean() > 0.4
+    m = wet.instance_id > 0
+    assert m.sum() > 50 and np.abs(wet.rgb[m] - dry.rgb[m]).mean() > 1e-3

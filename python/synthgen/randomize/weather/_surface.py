@@ -14,12 +14,14 @@ def wrap_surfaces(ctx: WeatherContext, ground: Optional[Callable[[int], int]],
                   objects: Optional[Callable[[int], int]]) -> Dict[str, int]:
     """Replaces the ground's material by ``ground(its material)`` and every material of every
     object of the frame by ``objects(material)`` (a model with materials of its own: each one,
-    as a per-instance material map). A material several objects share is wrapped once. The
-    ground of a photo (a shadow catcher) is left as it is. Returns how many were wrapped."""
+    as a per-instance material map). A material several objects share is wrapped once. A
+    ground that catches shadows (a photo's, a backplate's) is left as it is, and so are the
+    unlabelled posts under signs and plates. Returns how many were wrapped."""
     r = ctx.renderer
     scene = r.scene
     n = {"ground": 0, "materials": 0}
-    if ground is not None and r.ground is not None and r.photos is None and r.ground_material is not None:
+    if ground is not None and r.ground is not None and r.photos is None and r.ground_material is not None \
+            and not scene.instance_catcher(r.ground):
         scene.set_instance_material(r.ground, int(ground(r.ground_material)))
         n["ground"] = 1
     if objects is None:
