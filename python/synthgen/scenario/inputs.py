@@ -99,7 +99,10 @@ class _Checker:
                 continue
             from ..frame.resources import realize  # (synthgen.frame imports this package)
 
-            params = realize(self.scene, given_params(option))
+            try:  # inline textures are created here: their errors are this plugin's
+                params = realize(self.scene, given_params(option))
+            except SynthgenError as e:
+                self.fail(option.loc, f"this {kind} cannot be created", e)
             if kind == "light":
                 if option.get("type") == "envmap":
                     if option.get("file") is not None:
