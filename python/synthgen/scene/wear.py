@@ -26,8 +26,8 @@ import numpy as np
 
 from .._core import Scene, SynthgenError, TextureRef
 
-__all__ = ["rust", "scratches", "add_scratch_lines", "ice", "snow", "snow_layer", "wet", "wet_twin", "wet_ground", "dirt", "decal",
-           "RUST_COLORS", "WATER_IOR"]
+__all__ = ["rust", "scratches", "add_scratch_lines", "ice", "snow", "snow_layer", "wet", "wet_twin", "wet_ground",
+           "dirt", "decal", "RUST_COLORS", "WATER_IOR", "SNOW_COLOR", "world_points"]
 
 #: Colour ramp of rust (linear RGB): dark brown to orange (the seed's rust colour map).
 RUST_COLORS = ((0.0, (0.05, 0.02, 0.01)), (0.35, (0.16, 0.05, 0.015)), (0.7, (0.42, 0.14, 0.03)),
