@@ -235,12 +235,14 @@ def test_a_photos_hdr_is_turned_so_its_sun_matches_the_photos(tmp_path):
 
 
 def test_weather_with_photo_backgrounds_is_an_error_at_its_key(tmp_path, photo_dir):
-    """A photo has no fog of its own: fog or haze over it is refused at the YAML key, before
-    anything renders (docs/weather.md)."""
+    """Fog or haze over a photo is applied from the photo's depth map (test_weather_photo_fog.py):
+    a photo without one is refused at the YAML key, before anything renders (docs/weather.md)."""
     from synthgen.scenario import check_inputs, load_scenario
 
     d, _ = photo_dir
-    path = _scenario(tmp_path, photos=str(d), extra="weather: {fog: {visibility: 50}}")
-    with pytest.raises(sg.SynthgenError, match=r"aug\.yaml:\d+:\d+: weather\.fog: not available with photo backgrounds"):
-        check_inputs(load_scenario(path))
+    for kind in ("fog", "haze"):
+        path = _scenario(tmp_path, photos=str(d), extra=f"weather: {{{kind}: {{visibility: 50}}}}")
+        with pytest.raises(sg.SynthgenError, match=rf"aug\.yaml:\d+:\d+: weather\.{kind}: over a photo background "
+                                                   r"it needs the photo's depth map"):
+            check_inputs(load_scenario(path))
 

@@ -36,6 +36,11 @@ class PlacedObject:
     post_world: Optional[np.ndarray] = None  #: world_from_object of its post once placed
     #: What each randomizer did (recorded in the metadata under its key), in sample order.
     info: Dict[str, Any] = field(default_factory=dict)
+    #: The material it renders with (-1: a model with materials of its own, ``materials``).
+    material: int = -1
+    #: A model's own materials: mesh material id -> the material it renders with (after the
+    #: randomizers; weather wraps each of them).
+    materials: Dict[int, int] = field(default_factory=dict)
 
 
 def frame_camera(cam: CameraSpec, resolution: Tuple[int, int], rng: np.random.Generator) -> PinholeCamera:

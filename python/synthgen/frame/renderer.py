@@ -461,7 +461,8 @@ class FrameRenderer:
         self._set_material_map(inst, material_map)
         info = {r.key: done[r.key] for r in randomize.randomizers() if r.key in done}
         forward = AXES[o.forward or shape.forward or "+x"] if kind in ("primitive", "mesh", "asset") else AXES["+x"]
-        return PlacedObject(o, shape, inst, local, radius, dims, post, forward=forward, info=info)
+        return PlacedObject(o, shape, inst, local, radius, dims, post, forward=forward, info=info, material=mat,
+                            materials={} if keys is None else dict(zip(keys, mats)))
 
     def _set_material_map(self, inst: int, material_map: Dict[int, int]) -> None:
         """Per-instance materials of a model that keeps its own (only instances that have or

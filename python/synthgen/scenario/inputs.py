@@ -99,7 +99,10 @@ class _Checker:
                 continue
             from ..frame.resources import realize  # (synthgen.frame imports this package)
 
-            params = realize(self.scene, given_params(option))
+            try:  # inline textures are created here: their errors are this plugin's
+                params = realize(self.scene, given_params(option))
+            except SynthgenError as e:
+                self.fail(option.loc, f"this {kind} cannot be created", e)
             if kind == "light":
                 if option.get("type") == "envmap":
                     if option.get("file") is not None:
@@ -165,7 +168,7 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
     if ground["enabled"]:
         c.plugin("material", ground["material"], ground.locs.get("material", ground.loc))
     c.objects(spec["objects"])
-    _check_weather(sc, spec)
+    ps = None
     if spec.get("background") is not None:
         from ..background.photoset import PhotoSet
 
@@ -184,6 +187,7 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
             raise
         except (SynthgenError, OSError) as e:
             c.fail(loc, "cannot use this photo", e)
+    _check_weather(sc, spec, ps)
     if c.fonts:
         c.check_fonts(spec.locs.get("objects", spec.loc))
     kinds: Dict[str, int] = {}
@@ -192,8 +196,8 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
     return kinds
 
 
-def _check_weather(sc: Scenario, spec: Validated) -> None:
-    """Each weather condition's demands on the scenario, reported at its key."""
+def _check_weather(sc: Scenario, spec: Validated, photos: Any = None) -> None:
+    """Each weather condition's demands on the scenario (and its photos), reported at its key."""
     from ..randomize import weather
 
     w = spec["weather"]
@@ -205,4 +209,4 @@ def _check_weather(sc: Scenario, spec: Validated) -> None:
         def fail(message: str, wl: Loc = wl) -> None:
             raise SceneFileError(sc.source, wl.line, wl.column, wl.path, message)
 
-        c.check(w[c.key], spec, fail)
+        c.check(w[c.key], spec, fail, photos)

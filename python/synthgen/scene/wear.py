@@ -1,4 +1,5 @@
-"""Wear effects as material presets: rust, scratches, ice, dirt (gravity and noise).
+"""Wear effects as material presets: rust, scratches, ice, snow, dirt (gravity and noise), and
+the water film of wet surfaces (:func:`wet`).
 
 Each function adds textures and materials to a :class:`synthgen.Scene` and returns the id of
 a ``mix`` material that blends a wear material over ``base`` (a material id) with a procedural
@@ -19,13 +20,14 @@ relative mapping, per metre for object/world); roughness in [0, 1]; bump heights
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from .._core import Scene, SynthgenError, TextureRef
 
-__all__ = ["rust", "scratches", "add_scratch_lines", "ice", "dirt", "decal", "RUST_COLORS"]
+__all__ = ["rust", "scratches", "add_scratch_lines", "ice", "snow", "snow_layer", "wet", "wet_twin", "wet_ground",
+           "dirt", "decal", "RUST_COLORS", "WATER_IOR", "SNOW_COLOR", "world_points"]
 
 #: Colour ramp of rust (linear RGB): dark brown to orange (the seed's rust colour map).
 RUST_COLORS = ((0.0, (0.05, 0.02, 0.01)), (0.35, (0.16, 0.05, 0.015)), (0.7, (0.42, 0.14, 0.03)),
@@ -47,16 +49,18 @@ def _ramp(colors: Sequence) -> Dict[str, Any]:
 _CALIBRATION = np.random.default_rng(12345).random((4096, 3)).astype(np.float32)
 
 
-def _threshold(scene: Scene, tex: int, amount: float) -> float:
-    """Value t such that a fraction `amount` of the mask's raw values over the unit cube
-    exceeds t."""
-    v = scene.texture_values(tex, _CALIBRATION)[:, 0]
+def _threshold(scene: Scene, tex: int, amount: float, points: Optional[np.ndarray] = None) -> float:
+    """Value t such that a fraction `amount` of the mask's raw values over the unit cube (or
+    over ``points``: world-mapped masks, whose features are metres) exceeds t."""
+    v = scene.texture_values(tex, _CALIBRATION if points is None else points)[:, 0]
     return float(np.quantile(v, 1.0 - amount)) if 0.0 < amount < 1.0 else (-1e9 if amount >= 1.0 else 1e9)
 
 
-def _mask(scene: Scene, raw: Dict[str, Any], amount: float, softness: float) -> int:
-    """A [0, 1] mask covering `amount` of the object: the blend with parameters `raw`
-    remapped around its calibrated threshold (soft edge of width `softness` in raw units).
+def _mask(scene: Scene, raw: Dict[str, Any], amount: float, softness: float,
+          points: Optional[np.ndarray] = None) -> int:
+    """A [0, 1] mask covering `amount` of the object (or of ``points``): the blend with
+    parameters `raw` remapped around its calibrated threshold (soft edge of width `softness`
+    in raw units).
     The remap goes into that blend itself (one texture lookup less per hit than a blend
     over it): the unshaped blend exists only while the threshold is calibrated."""
     if amount <= 0.0 or amount >= 1.0:
@@ -64,7 +68,7 @@ def _mask(scene: Scene, raw: Dict[str, Any], amount: float, softness: float) -> 
         # remap's two ends equal in float precision).
         return scene.add_texture("constant", {"value": 1.0 if amount >= 1.0 else 0.0})
     probe = scene.add_texture("blend", raw)
-    t = _threshold(scene, probe, amount)
+    t = _threshold(scene, probe, amount, points)
     scene.remove_texture(probe)
     return scene.add_texture("blend", dict(raw, remap=[t - 0.5 * softness, t + 0.5 * softness], smooth=True))
 
@@ -258,6 +262,192 @@ def ice(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.5, scale: 
     wear = scene.add_material("principled", {"base_color": [0.85, 0.9, 0.95], "roughness": 0.15, "clearcoat": 1.0,
                                              "bump_map": TextureRef(bump_tex), "bump_scale": float(bump)})
     return _mix(scene, base, wear, mask)
+
+
+#: Refractive index of water: the film of wet surfaces, puddles.
+WATER_IOR = 1.33
+
+#: Fresh snow's albedo (linear RGB): 0.8-0.9 in the visible, a little less towards the red
+#: (Warren 1982, "Optical properties of snow", Reviews of Geophysics 20(1), fig. 9).
+SNOW_COLOR = (0.8, 0.84, 0.88)
+
+
+def world_points(feature: float, n: int = 4096, seed: int = 12345, flat: bool = False) -> np.ndarray:
+    """Points for calibrating the threshold of a world-mapped mask (features of ``feature``
+    metres): uniform over a square of 32 features on a side, on the ground plane y = 0
+    (``flat``) or in a cube, so that the quantiles see many features."""
+    rng = np.random.default_rng(seed)
+    p = (rng.random((n, 3)) - 0.5) * 32.0 * float(feature)
+    if flat:
+        p[:, 1] = 0.0
+    return p.astype(np.float32)
+
+
+def snow_layer(scene: Scene, *, seed: int = 0, amount: float = 0.85, scale: float = 1.5,
+               max_slope: float = 45.0, color: Sequence[float] = SNOW_COLOR, bump: float = 0.004,
+               softness: float = 0.15) -> Tuple[int, int]:
+    """(snow material, its mask texture) of :func:`snow`, to lay over many materials."""
+    amount = _check("amount", amount, 0.0, 1.0)
+    _check("scale", scale, 1e-3, 1e3)
+    max_slope = _check("max_slope", max_slope, 0.0, 90.0)
+    _check("bump", bump, 0.0, 0.05)
+    softness = _check("softness", softness, 0.01, 2.0)
+    lo, hi = np.radians(min(90.0, max_slope + 10.0)), np.radians(max(0.0, max_slope - 10.0))
+    facing = scene.add_texture("facing", {"remap": [float(np.cos(lo)), float(np.cos(hi))], "smooth": True})
+    noise = scene.add_texture("noise", {"pattern": "fbm", "octaves": 4, "mapping": "world",
+                                        "scale": 1.0 / float(scale), "seed": int(seed), "remap": [-1.0, 1.0]})
+    patches = _mask(scene, {"a": TextureRef(noise), "b": 0.0, "op": "add"}, amount, softness,
+                    world_points(scale))
+    mask = scene.add_texture("blend", {"a": TextureRef(facing), "b": TextureRef(patches), "op": "multiply",
+                                       "factor": 1.0})
+    col = [float(c) for c in color]
+    grain = scene.add_texture("noise", {"pattern": "fbm", "octaves": 3, "mapping": "world", "scale": 4.0,
+                                        "seed": int(seed) + 1, "remap": [-1.0, 1.0],
+                                        "ramp_positions": [0.0, 1.0],
+                                        "ramp_colors": [0.9 * c for c in col] + col})
+    params: Dict[str, Any] = {"albedo": TextureRef(grain)}
+    if bump > 0.0:
+        relief = scene.add_texture("noise", {"pattern": "turbulence", "octaves": 3, "mapping": "world",
+                                             "scale": 8.0, "seed": int(seed) + 2})
+        params.update(bump_map=TextureRef(relief), bump_scale=float(bump))
+    return scene.add_material("diffuse", params), mask
+
+
+def snow(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.85, scale: float = 1.5,
+         max_slope: float = 45.0, color: Sequence[float] = SNOW_COLOR, bump: float = 0.004,
+         softness: float = 0.15) -> Any:
+    """Snow over ``base``: it lies on surfaces that face up and slides off steep ones -- the
+    ``facing`` texture (the shading normal's up component in world space), 1 on faces within
+    ``max_slope`` - 10 degrees of horizontal, 0 beyond ``max_slope`` + 10, smooth between --
+    in patches: an fBm of features ``scale`` metres in world coordinates (patches run on from the
+    ground onto objects) covering ``amount`` of the up-facing area, thinning out over
+    ``softness`` (mask units). Snow is a white Lambertian ``color`` (fresh snow reflects 80-90%
+    of visible light, diffusely: no specular glare; Warren 1982) varied by a faint noise (its
+    grain, drifts) with a turbulence bump of ``bump`` metres. Extends :func:`ice` (frost: a glossy
+    film anywhere) to what falls and settles."""
+    wear, mask = snow_layer(scene, seed=seed, amount=amount, scale=scale, max_slope=max_slope, color=color,
+                            bump=bump, softness=softness)
+    return _mix(scene, base, wear, mask)
+
+
+def _given(v: Any) -> Any:
+    """A material parameter as material_info gives it, for add_material (texture references)."""
+    if isinstance(v, tuple) and len(v) == 2 and v[0] == "texture":
+        return TextureRef(int(v[1]))
+    return v
+
+
+#: Internal reflectance of diffuse light at a water-air interface, 1 - (1 - F_dr,ext) / n^2
+#: with F_dr,ext = 0.066 for n = 1.33 (Lekner & Dorf 1988, eq. 3).
+_WATER_F_INT = 1.0 - (1.0 - 0.066) / WATER_IOR ** 2
+
+
+def wet_twin(scene: Scene, material: int, *, roughness: float = 0.05) -> Optional[int]:
+    """The wet look of an existing material (by id; its textures are kept), or None for
+    materials a film does not change here (metals, glass, emitters, cut-outs, mixes).
+
+    A water film over a rough surface darkens it and adds a smooth reflection of its own:
+    light enters the film, is reflected diffusely by the surface below, and of what travels back
+    up more than half is reflected down again at the water-air interface (total internal
+    reflection beyond 49 degrees), to be absorbed in part at the next bounce (Lekner & Dorf
+    1988, "Why some things are darker when wet", Applied Optics 27(7); Jensen, Legakis & Dorsey
+    1999, "Rendering of wet materials"). The ``coated`` material is exactly that model (a clear
+    coat of index ``ior`` over a Lambertian base with the inter-reflections summed), so:
+
+    - ``diffuse`` -> ``coated`` of the same albedo under a water film (ior 1.33, ``roughness``);
+    - ``coated`` (paint, plastic: not porous, water beads on it) -> the same, its coat at most
+      ``roughness`` rough;
+    - ``principled`` (dielectric parts) -> the same with a clear coat of ``roughness`` and the
+      base colour darkened by the film's factor (1 - F_int) / (1 - a F_int) (a = 0.3) in
+      proportion to its roughness (rough = porous; smooth ones keep their colour).
+    """
+    _check("roughness", roughness, 0.0, 1.0)
+    info = scene.material_info(int(material))
+    kind, p = info["type"], {k: _given(v) for k, v in info["params"].items()}
+    if kind == "diffuse":
+        if "alpha" in p:
+            return None
+        return scene.add_material("coated", {"albedo": p.get("albedo", 0.5), "ior": WATER_IOR,
+                                             "roughness": float(roughness), "specular": 1.0})
+    if kind == "coated":
+        q = dict(p, roughness=min(float(p.get("roughness", 0.0)), float(roughness)))
+        return scene.add_material("coated", q)
+    if kind == "principled":
+        if "alpha" in p or float(p.get("transmission", 0.0)) > 0.0 or p.get("alpha_mode", "blend") != "blend":
+            return None
+        rough = p.get("roughness", 0.5)
+        rough = float(rough) if not isinstance(rough, TextureRef) else 0.5
+        metal = p.get("metallic", 0.0)
+        metal = float(metal) if not isinstance(metal, TextureRef) else 0.0
+        if "metallic_roughness" in p:
+            rough, metal = 0.5, 0.0
+        a = 0.3
+        k = 1.0 - rough * (1.0 - metal) * (1.0 - (1.0 - _WATER_F_INT) / (1.0 - a * _WATER_F_INT))
+        color = p.get("base_color", [0.8, 0.8, 0.8])
+        if isinstance(color, TextureRef):
+            color = TextureRef(scene.add_texture("blend", {"a": color, "b": [k, k, k], "op": "multiply",
+                                                           "factor": 1.0}))
+        else:
+            color = [float(c) * k for c in (color if isinstance(color, (list, tuple)) else [color] * 3)]
+        coat = float(roughness)
+        if float(p.get("clearcoat", 0.0)) > 0.0:  # a clear coat of its own: the smoother of the two
+            coat = min(coat, float(p.get("clearcoat_roughness", 0.03)))
+        q = dict(p, base_color=color, clearcoat=1.0, clearcoat_roughness=coat)
+        return scene.add_material("principled", q)
+    return None
+
+
+def wet(scene: Scene, base: Base, *, wetness: Union[float, int, TextureRef] = 1.0, roughness: float = 0.05) -> Any:
+    """``base`` under a water film (:func:`wet_twin`) where ``wetness`` (a constant in [0, 1] or
+    a mask texture) says: the mix of the dry and the wet material. A list of bases gives the
+    list of their mixes; materials without a wet look stay as they are."""
+    if not isinstance(base, (int, np.integer)):
+        return [wet(scene, b, wetness=wetness, roughness=roughness) for b in base]
+    if not isinstance(wetness, TextureRef):
+        wetness = _check("wetness", wetness, 0.0, 1.0)
+        if wetness == 0.0:
+            return int(base)
+    twin = wet_twin(scene, int(base), roughness=roughness)
+    if twin is None:
+        return int(base)
+    return scene.add_material("mix", {"material_a": int(base), "material_b": int(twin), "weight": wetness})
+
+
+def wet_ground(scene: Scene, base: int, *, seed: int = 0, wetness: float = 0.9, roughness: float = 0.1,
+               puddles: float = 0.1, puddle_scale: float = 3.0) -> int:
+    """A wet ground over ``base`` (its material id): a water film (:func:`wet_twin`, ``roughness``)
+    over the fraction ``wetness`` of it in fBm patches (features 2 ``puddle_scale`` metres: a
+    drying road is wet in blotches), and puddles over the fraction ``puddles``: the low end of
+    another fBm of features ``puddle_scale`` metres, flat water with a mirror surface (the film
+    with roughness 0: it reflects the sky, the objects and the lights) and a wet rim (the film
+    wherever that noise covers twice the puddles' share). World mapping on the plane y = 0;
+    both shares are calibrated over it. The base unchanged when it has no wet look."""
+    wetness = _check("wetness", wetness, 0.0, 1.0)
+    puddles = _check("puddles", puddles, 0.0, 1.0)
+    _check("puddle_scale", puddle_scale, 1e-2, 1e3)
+    film = wet_twin(scene, int(base), roughness=roughness)
+    if film is None:
+        return int(base)
+    pts = world_points(2.0 * puddle_scale, flat=True)
+    cover = scene.add_texture("noise", {"pattern": "fbm", "octaves": 4, "mapping": "world",
+                                        "scale": 0.5 / float(puddle_scale), "seed": int(seed), "remap": [-1.0, 1.0]})
+    wet_mask = _mask(scene, {"a": TextureRef(cover), "b": 0.0, "op": "add"}, wetness, 0.3, pts)
+    out = int(base)
+    if puddles > 0.0:
+        water = scene.add_texture("noise", {"pattern": "fbm", "octaves": 5, "mapping": "world",
+                                            "scale": 1.0 / float(puddle_scale), "seed": int(seed) + 1,
+                                            "remap": [-1.0, 1.0]})
+        raw = {"a": TextureRef(water), "b": 0.0, "op": "add"}
+        rim = _mask(scene, raw, min(1.0, 2.0 * puddles), 0.05, pts)
+        wet_mask = scene.add_texture("blend", {"a": TextureRef(wet_mask), "b": TextureRef(rim), "op": "max",
+                                               "factor": 1.0})
+    if wetness > 0.0 or puddles > 0.0:
+        out = scene.add_material("mix", {"material_a": out, "material_b": int(film), "weight": TextureRef(wet_mask)})
+    if puddles > 0.0:
+        pool = wet_twin(scene, int(base), roughness=0.0)
+        puddle = _mask(scene, raw, puddles, 0.02, pts)
+        out = scene.add_material("mix", {"material_a": out, "material_b": int(pool), "weight": TextureRef(puddle)})
+    return int(out)
 
 
 def dirt(scene: Scene, base: Base, *, seed: int = 0, amount: float = 0.4, scale: float = 5.0,

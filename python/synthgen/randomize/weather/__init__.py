@@ -18,8 +18,8 @@ Protocol (:class:`Condition`):
 
 - ``key`` (the scenario key), ``group``, ``order``, ``schema`` (its parameters, every leaf a
   distribution; ``probability`` is added here) and ``doc``;
-- :meth:`Condition.check` -- what the scenario's inputs must satisfy (photo backgrounds, ...),
-  reported at the condition's key before anything renders;
+- :meth:`Condition.check` -- what the scenario's inputs must satisfy (photo backgrounds and
+  their depth maps, ...), reported at the condition's key before anything renders;
 - :meth:`Condition.params` -- the drawn values as the frame's plain parameters (meta);
 - :meth:`Condition.apply` -- changes the frame's scene before it renders (a medium, materials,
   lights, the sky); returns what to add to the metadata;
@@ -72,9 +72,11 @@ class Condition:
     schema: Record
     doc: str = ""
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any) -> None:
+    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
         """Checks the scenario's inputs against this condition; ``fail(message)`` reports an
-        error at the condition's key."""
+        error at the condition's key. ``photos``: the scenario's photo backgrounds (a
+        :class:`synthgen.background.photoset.PhotoSet`, every photo and calibration readable)
+        or None."""
 
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
         """The frame's parameters from the drawn values (plain numbers; recorded in meta)."""

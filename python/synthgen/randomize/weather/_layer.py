@@ -1,8 +1,11 @@
 """Shared by the medium conditions whose medium is the ``homogeneous`` plugin (a layer of
-constant density, cpp/medium/homogeneous.cpp): fog and haze."""
+constant density, cpp/medium/homogeneous.cpp): fog and haze; over photo backgrounds the same
+layer in image space (Koschmieder's law from the photo's depth map)."""
 from __future__ import annotations
 
 from typing import Any, Dict, Mapping, Optional
+
+import numpy as np
 
 from ...schema.fields import Number, Record
 from ...schema.random import R
@@ -12,8 +15,8 @@ from . import Condition, WeatherContext
 def refuse_photos(spec: Mapping[str, Any], fail: Any, what: str) -> None:
     """A medium rendered around the inserted objects only would not match the photo."""
     if spec.get("background") is not None:
-        fail(f"not available with photo backgrounds yet: the photo has no {what} of its own "
-             "(fog on photos, from their depth, is to come: docs/weather.md)")
+        fail(f"not available with photo backgrounds: the photo has no {what} of its own, and a depth map does not "
+             "say where it would be (fog and haze over photos are applied from their depth: docs/weather.md)")
 
 
 def layer_schema(visibility: float, top: float, albedo: float, g: float) -> Record:
@@ -29,16 +32,54 @@ def layer_schema(visibility: float, top: float, albedo: float, g: float) -> Reco
 
 
 class Layer(Condition):
-    """A homogeneous layer from the ground up to ``top``."""
+    """A homogeneous layer from the ground up to ``top``: the path-traced medium, or over a
+    photo background Koschmieder's law in image space from the photo's depth map
+    (synthgen.post.photo.fog), with the same extinction."""
 
     group = "medium"
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any) -> None:
-        refuse_photos(spec, fail, "fog")
+    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
+        if spec.get("background") is None or photos is None:
+            return
+        for i, path in enumerate(photos.paths):
+            if photos.setup(i).depth is None:
+                fail(f"over a photo background it needs the photo's depth map: {path} has none (its calibration's "
+                     "'depth': the distance of what each pixel shows, from which the fog is applied to the photo "
+                     "and the inserted objects alike; docs/weather.md)")
 
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
         return {k: float(value[k]) for k in ("visibility", "top", "albedo", "g")}
 
     def apply(self, ctx: WeatherContext, params: Mapping[str, Any]) -> Optional[Dict[str, Any]]:
+        if ctx.photo is not None:
+            return {"on_photo": "koschmieder"}  # image space, after the composite (post)
         ctx.renderer.scene.set_medium("homogeneous", dict(params))
         return None
+
+    def post(self, ctx: WeatherContext, arrays: Dict[str, np.ndarray], params: Mapping[str, Any]
+             ) -> Dict[str, np.ndarray]:
+        """Over a photo: I = J t + A (1 - t), t = exp(-3.912 / visibility x the pixel's path in
+        the layer), the path up to the composite's depth (the photo's depth map, the inserted
+        objects' own where they show; where the photo's depth is unknown, the calibrated ground
+        for rays that reach it, else the sky: the whole path); A from the photo's dark channel.
+        Sets ``ctx.transmittance`` for the objects' weather labels."""
+        if ctx.photo is None:
+            return arrays
+        from ...post.photo import fog
+
+        camera = ctx.renderer.scene.camera
+        depth = np.asarray(arrays["depth"], np.float64)
+        dirs, per_z = fog.ray_directions(camera, depth.shape)
+        origin_y = float(np.asarray(camera.world_from_camera, np.float64)[1, 3])
+        dist = depth * per_z
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ground = np.where(dirs[..., 1] < 0, -origin_y / dirs[..., 1], np.inf)
+        dist = np.where(np.isfinite(dist), dist, ground)
+        beta = 3.912 / float(params["visibility"])
+        t = np.exp(-beta * fog.layer_path(origin_y, dirs[..., 1], dist, float(params["top"])))
+        a = fog.airlight(ctx.photo.pixels)
+        ctx.transmittance = t.astype(np.float32)
+        ctx.extra.update(extinction=round(beta, 9), airlight=[round(float(v), 6) for v in a])
+        out = dict(arrays)
+        out["rgb"] = fog.koschmieder(arrays["rgb"], t, a)
+        return out

@@ -32,7 +32,7 @@ class Clouds(Condition):
         "g": R(Number(0.8, min=-0.99, max=0.99, doc="Henyey-Greenstein asymmetry (> 0: forward scattering)")),
     })
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any) -> None:
+    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
         refuse_photos(spec, fail, "clouds")
 
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:

@@ -33,7 +33,7 @@ class GroundFog(Condition):
         "g": R(Number(0.75, min=-0.99, max=0.99, doc="Henyey-Greenstein asymmetry (> 0: forward scattering)")),
     })
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any) -> None:
+    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
         refuse_photos(spec, fail, "ground fog")
 
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
