@@ -49,17 +49,6 @@ class HeadlampLight final : public Light {
     m_forward = normalize(forward);
     m_up = normalize(up - m_forward * dot(up, m_forward));
     m_right = cross(m_forward, m_up);
-    // Solid-angle integral of the relative pattern: I = I_max h(H) v(V) and
-    // d omega = cos V dH dV, so the integral separates (midpoint rule, 0.01 degree steps).
-    double h_int = 0.0, v_int = 0.0;
-    const int n = 18000;
-    const double step = 180.0 / n, rad = k_pi_d / 180.0;
-    for (int i = 0; i < n; ++i) {
-      double a = -90.0 + (i + 0.5) * step;
-      h_int += horizontal(a) * step * rad;
-      v_int += vertical(a) * std::cos(a * rad) * step * rad;
-    }
-    m_solid_angle = float(h_int * v_int);
   }
   bool sample(const LightSampleContext& ctx, const Vec2f&, LightSample* out) const override {
     Vec3f d = m_pos - ctx.p;
@@ -78,13 +67,21 @@ class HeadlampLight final : public Light {
     out->infinite = false;
     return true;
   }
-  /// The luminous flux: I_max x the solid-angle integral of the relative pattern.
-  float power() const override { return luminance(m_intensity) * m_solid_angle; }
+  /// For the power-only light choice (RenderScene::group_pick, when a scene has very many
+  /// lights): an isotropic lamp of the beam's peak intensity, 4 pi I_max, as pbrt-v4's
+  /// SpotLight::Bounds. Weighed choices use selection_intensity().
+  float power() const override { return 4.f * k_pi * luminance(m_intensity); }
   bool is_delta() const override { return true; }
   bool bounding_sphere(Vec3f* centre, float* radius) const override {
     *centre = m_pos;
     *radius = 0.f;
     return true;
+  }
+  bool has_selection_intensity() const override { return true; }
+  float selection_intensity(const Vec3f& p) const override {
+    Vec3f d = p - m_pos;
+    float len = length(d);
+    return len > 0.f ? luminance(m_intensity) * relative_intensity(d / len) : luminance(m_intensity);
   }
   /// It lights the half-space in front of the lamp only.
   bool normal_cone(Vec3f* axis, float* half_angle) const override {
@@ -119,7 +116,6 @@ class HeadlampLight final : public Light {
   Color m_intensity;
   bool m_low;
   float m_cutoff;
-  float m_solid_angle = 0.f;
 };
 
 namespace {
