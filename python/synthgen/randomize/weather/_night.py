@@ -413,15 +413,21 @@ def meter(ctx: WeatherContext, quarter: int = 4, spp: int = 8) -> np.ndarray:
 
 def auto_exposure(y: np.ndarray, key: float) -> Tuple[float, float]:
     """(ev, log-average) of an auto-exposure that maps the frame's log-average luminance to
-    ``key``.
+    ``key``, unless that would push more than 3% of the frame past white.
     NOTE: the log-average (geometric mean) luminance as the scene's key, E. Reinhard et al.,
     "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002, eq. 1; each pixel
-    floored at 1% of the median, so a black night sky does not drag a lit street into white
-    (a camera's metering weighs the subject)."""
+    floored at 1% of the median, so a black night sky does not drag the exposure up. The
+    highlight limit (the 97th percentile at white) is a camera's highlight-weighted metering at
+    night: the pools under street lamps stay below clipping, the lamps themselves (a few
+    pixels) clip."""
     y = np.asarray(y, np.float64).ravel()
     floor = max(float(np.median(y)) * 0.01, 1e-30)
     log_avg = float(np.exp(np.mean(np.log(np.maximum(y, floor)))))
-    return math.log2(float(key) / log_avg), log_avg
+    ev = math.log2(float(key) / log_avg)
+    high = float(np.percentile(y, 97.0))
+    if high > 0.0:
+        ev = min(ev, math.log2(1.0 / high))
+    return ev, log_avg
 
 
 def _expose(ctx: WeatherContext, exposure: Mapping[str, Any], strength: float) -> Dict[str, Any]:
@@ -437,5 +443,5 @@ def _expose(ctx: WeatherContext, exposure: Mapping[str, Any], strength: float) -
     # log-average luminance in cd/m^2, S = 100, K = 12.5 (ISO 2720's reflected-light meter
     # calibration): a lit street at night is about -2 to 3, daylight 12 to 15.
     cd = log_avg * LM_PER_W / strength if strength > 0 else float("nan")
-    return {"ev": round(ev, 4), "auto": True, "key": float(exposure["key"]),
+    return {"ev": round(ev, 6), "auto": True, "key": float(exposure["key"]),
             "scene_ev100": round(math.log2(cd * 100.0 / 12.5), 3) if cd > 0 else None}
