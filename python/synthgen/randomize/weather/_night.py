@@ -42,9 +42,12 @@ STREET_CCT = {"sodium": 2000.0, "led": 4000.0}
 #: Moonlight's colour temperature (K): sunlight reddened by the Moon's reflectance.
 MOON_CCT = 4100.0
 #: Street light luminaire: its lens (metres, along and across the arm), and the share of the
-#: spot's intensity the lit lens adds straight down (it is seen; the spot does the lighting).
+#: spot's intensity the lit lens adds straight down: it is there to be seen (80 cd/m^2 for a
+#: 5000 cd lamp: white at any night or dusk exposure), the spot does the lighting. All lenses
+#: are one emitter (one light to weigh per shading point, not one per street light), found
+#: mostly by BSDF sampling: a larger share would be noise under the lamps.
 LENS_SIZE = (0.5, 0.25)
-LENS_SHARE = 0.05
+LENS_SHARE = 0.002
 
 
 def cct_rgb(kelvin: float) -> List[float]:
@@ -326,12 +329,12 @@ def _street_lights(ctx: WeatherContext, street: Mapping[str, Any], strength: flo
     # the spot's (L = share x I / area).
     lens_l = _radiance(colour, LENS_SHARE * float(street["intensity"]) / (LENS_SIZE[0] * LENS_SIZE[1]), strength)
     kit = _StreetKit.of(r)
-    if street["poles"]:
-        r.scene.update_material(kit.lens_material, "emissive", {"radiance": lens_l, "albedo": [0.6, 0.6, 0.6]})
     obstacles = [(np.asarray(o.world, np.float64)[[0, 2], 3], float(o.radius)) for o in r.objects
                  if o.world is not None and r.scene.instance_visible(o.instance)]
     pool = r.weather_pool("street_lights")
     yaw = float(street["road_yaw"])
+    turn = P.rotate([0.0, 1.0, 0.0], yaw).astype(np.float64)
+    lenses: List[np.ndarray] = []
     count = 0
     for base, side in street_light_positions(street, cam):
         if any(np.hypot(*(base[[0, 2]] - c)) < rad + 0.5 for c, rad in obstacles):
@@ -345,23 +348,29 @@ def _street_lights(ctx: WeatherContext, street: Mapping[str, Any], strength: flo
                                 "direction": [0.0, -1.0, 0.0], "intensity": intensity,
                                 "cone_angle": 65.0, "falloff_start": 30.0}))
         if street["poles"]:
-            turn = P.rotate([0.0, 1.0, 0.0], yaw).astype(np.float64)
             parts = [  # (mesh, material, centre, size along (road, up, lateral))
                 (kit.box, kit.pole_material, base + np.array([0.0, 0.5 * h + 0.1, 0.0]), (0.16, h + 0.2, 0.16)),
                 (kit.box, kit.pole_material, base + np.array([0.0, h + 0.14, 0.0]) - side * 0.5 * arm * n,
                  (0.08, 0.08, arm + 0.1)),
                 (kit.box, kit.head_material, head + np.array([0.0, 0.07, 0.0]), (LENS_SIZE[1] + 0.06, 0.14,
                                                                                   LENS_SIZE[0] + 0.1)),
-                (kit.lens, kit.lens_material, head - np.array([0.0, 0.01, 0.0]), (LENS_SIZE[1], 1.0, LENS_SIZE[0])),
             ]
             for p, (mesh, mat, centre, size) in enumerate(parts):
                 m = (P.translate(centre).astype(np.float64) @ turn @ P.scale(size).astype(np.float64))
-                inst, existed = pool.take(4 * count + p, lambda: r.scene.add_instance(
+                inst, existed = pool.take(3 * count + p, lambda: r.scene.add_instance(
                     mesh, np.eye(4), class_id=0, instance_id=0, material_id=mat))
                 r.scene.set_instance_transform(inst, m.astype(np.float32))
                 r.scene.set_instance_visible(inst, True)
+            lens = turn[:3, :3] @ np.diag([LENS_SIZE[1], 1.0, LENS_SIZE[0]])
+            lenses.append(head - np.array([0.0, 0.01, 0.0]) + _LENS_CORNERS @ lens.T)
         count += 1
+    if lenses:
+        kit.show_lenses(r, np.concatenate(lenses), lens_l)
     return count
+
+
+#: A lens's corners in its own frame (a unit square at y = 0), wound to face down (-y).
+_LENS_CORNERS = np.array([[-0.5, 0.0, -0.5], [0.5, 0.0, -0.5], [0.5, 0.0, 0.5], [-0.5, 0.0, 0.5]])
 
 
 class _StreetKit:
@@ -372,13 +381,27 @@ class _StreetKit:
 
         b = P.box()
         self.box = scene.add_mesh(b["positions"], b["indices"], normals=b["normals"], uvs=b["uvs"], name="street box")
-        pl = P.plane(1.0, 1.0)
-        # The lens faces down: the plane turned over (its winding reversed, normal -y).
-        self.lens = scene.add_mesh(pl["positions"], np.asarray(pl["indices"])[:, ::-1].copy(),
-                                   normals=-np.asarray(pl["normals"], np.float32), uvs=pl["uvs"], name="street lens")
         self.pole_material = scene.add_material("coated", {"albedo": [0.32, 0.33, 0.34], "roughness": 0.4})
         self.head_material = scene.add_material("coated", {"albedo": [0.08, 0.08, 0.085], "roughness": 0.3})
         self.lens_material = scene.add_material("emissive", {"radiance": [0.0, 0.0, 0.0]})
+        self.lens_mesh: Optional[int] = None
+
+    def show_lenses(self, r: Any, corners: np.ndarray, radiance: List[float]) -> None:
+        """Every lens of the frame (4 world corners each, facing down) as one mesh, lit."""
+        k = len(corners) // 4
+        quads = np.arange(4 * k, dtype=np.uint32).reshape(k, 4)
+        # Wound clockwise seen from above: the triangles face down (-y), as their normals.
+        idx = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]).astype(np.uint32)
+        arrays = dict(positions=np.asarray(corners, np.float32), indices=idx,
+                      normals=np.tile(np.array([[0.0, -1.0, 0.0]], np.float32), (4 * k, 1)))
+        if self.lens_mesh is None:
+            self.lens_mesh = r.scene.add_mesh(name="street lenses", **arrays)
+        else:
+            r.scene.update_mesh(self.lens_mesh, name="street lenses", **arrays)
+        r.scene.update_material(self.lens_material, "emissive", {"radiance": radiance, "albedo": [0.6, 0.6, 0.6]})
+        inst, _ = r.weather_pool("street_lenses").take(0, lambda: r.scene.add_instance(
+            self.lens_mesh, np.eye(4), class_id=0, instance_id=0, material_id=self.lens_material))
+        r.scene.set_instance_visible(inst, True)
 
     @classmethod
     def of(cls, r: Any) -> "_StreetKit":
