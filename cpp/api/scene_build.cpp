@@ -190,6 +190,7 @@ void Scene::build_render_scene() {
     lw.radius2 = r * r;
     lw.power = lw.local ? std::max(l->power(), 0.f) : std::max(l->power(), 0.f) / (k_pi * scene_r * scene_r);
     lw.oriented = lw.local && l->normal_cone(&lw.axis, &lw.cone_angle);
+    if (lw.local && l->has_selection_intensity()) lw.directional = l;
     rs.light_weights.push_back(lw);
   }
 }

@@ -67,11 +67,16 @@ struct RenderScene {
     bool oriented = false;
     Vec3f axis{0.f};
     float cone_angle = k_pi;
+    /// A delta light whose intensity varies with direction (Light::has_selection_intensity):
+    /// weighed by its intensity towards p / d^2.
+    const Light* directional = nullptr;
   };
   std::vector<LightWeight> light_weights;
   /// Up to this many lights of a group are weighed at each shading point; more fall back to
-  /// group_pick.
-  static constexpr size_t k_max_weighed_lights = 16;
+  /// group_pick. A night street holds a few dozen (street lights and their lenses, headlamp
+  /// beams, each vehicle's lit lamps): weighing 64 costs a few hundred flops per vertex, less
+  /// than one shadow ray.
+  static constexpr size_t k_max_weighed_lights = 64;
   std::vector<uint32_t> infinite_lights;  ///< indices into `lights`
   /// Infinite lights seen only by glossy / specular bounces (Light::reflection_only); not in
   /// `lights` (never sampled).
@@ -156,6 +161,10 @@ struct RenderScene {
     if (!lw.local) return lw.power;
     Vec3f d = p - lw.centre;
     float d2 = dot(d, d);
+    // NOTE: for a delta light the flux density at p is exactly I(towards p) / d^2 (unoccluded):
+    // a spot's or headlamp's beam weighs by what it sends to p (zero outside it), not by its
+    // flux spread over the sphere, which under-weighs a headlamp in its beam 75-fold.
+    if (lw.directional) return lw.directional->selection_intensity(p) / std::max(d2, lw.radius2);
     float w = lw.power / (4.f * k_pi * std::max(d2, lw.radius2));
     if (lw.oriented && d2 > lw.radius2) {
       // NOTE: pbrt-v4's LightBounds::Importance (Pharr et al., "Physically Based Rendering",

@@ -83,6 +83,12 @@ class Light {
   /// One-sided emitters: a cone (unit axis, half-angle in radians) holding the normals of the
   /// sides that emit. False: it emits in every direction.
   virtual bool normal_cone(Vec3f* axis, float* half_angle) const { return false; }
+  /// Delta lights whose intensity varies with direction ("spot", "headlamp"): true when
+  /// selection_intensity() gives it, for light selection.
+  virtual bool has_selection_intensity() const { return false; }
+  /// The luminance of the intensity sent towards p (W/sr): light selection weighs such a light
+  /// by it / d^2, its exact unoccluded irradiance at p (RenderScene::light_weight).
+  virtual float selection_intensity(const Vec3f& p) const { return 0.f; }
 };
 
 /// Creates a light plugin (see light_types()) from parameters. Throws sg::Error naming `context`.

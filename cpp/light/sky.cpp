@@ -34,6 +34,7 @@
 #include <cmath>
 
 #include "core/sampling.h"
+#include "light/cie.h"
 #include "light/equirect.h"
 #include "light/light.h"
 
@@ -97,23 +98,6 @@ const double k_zenith_x[3][4] = {{0.00166, -0.00375, 0.00209, 0.0},
 const double k_zenith_y[3][4] = {{0.00275, -0.00610, 0.00317, 0.0},
                                  {-0.04214, 0.08970, -0.04153, 0.00516},
                                  {0.15346, -0.26756, 0.06670, 0.26688}};
-
-/// CIE XYZ -> linear sRGB (Rec. 709 primaries, D65 white), negative components clamped.
-/// NOTE: matrix of IEC 61966-2-1:1999 to 7 digits as tabulated by B. Lindbloom
-/// ("RGB/XYZ Matrices", brucelindbloom.com); its inverse's Y row is the Rec. 709 luminance
-/// (0.2126, 0.7152, 0.0722), so luminance(rgb) = Y for in-gamut colours.
-Color xyz_to_linear_srgb(double x, double y, double z) {
-  double r = 3.2404542 * x - 1.5371385 * y - 0.4985314 * z;
-  double g = -0.9692660 * x + 1.8760108 * y + 0.0415560 * z;
-  double b = 0.0556434 * x - 0.2040259 * y + 1.0572252 * z;
-  return Color(float(std::max(r, 0.0)), float(std::max(g, 0.0)), float(std::max(b, 0.0)));
-}
-
-/// CIE xyY -> XYZ: X = x Y / y, Z = (1 - x - y) Y / y.
-Color xyY_to_linear_srgb(double x, double y, double big_y) {
-  if (!(y > 0.0) || !(big_y > 0.0)) return Color(0.f);
-  return xyz_to_linear_srgb(x * big_y / y, big_y, (1.0 - x - y) * big_y / y);
-}
 
 // ---- The sun: Preetham appendix A.1, data as in Mitsuba 0.5's sunsky plugin, from
 // M. Iqbal, "An Introduction to Solar Radiation", Academic Press 1983 (absorption

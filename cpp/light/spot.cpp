@@ -60,6 +60,12 @@ class SpotLight final : public Light {
     *radius = 0.f;
     return true;
   }
+  bool has_selection_intensity() const override { return true; }
+  float selection_intensity(const Vec3f& p) const override {
+    Vec3f d = p - m_pos;
+    float len = length(d);
+    return len > 0.f ? luminance(m_intensity) * falloff(dot(d, m_axis) / len) : luminance(m_intensity);
+  }
 
  private:
   Vec3f m_pos, m_axis;

@@ -30,7 +30,7 @@ constexpr double k_pi_d = 3.14159265358979323846;
 // test_environment, test_coated, test_mix, test_conductor, test_dielectric, test_principled;
 // 115 at the time of writing: sampling 12, diffuse 7, emissive 6, area 1, sun 4, environment
 // 1, coated 13, mix 5, conductor 26, dielectric 20, principled 20; since then environment 2,
-// light_selection +1, homogeneous +6, tracking +6).
+// light_selection +3, homogeneous +6, tracking +6, twilight +2).
 // k_chi2_test_count is an upper bound on that number; a larger count
 // only makes each test more conservative (Bonferroni stays valid). With this level the
 // probability that a correct implementation fails *any* chi-square test of the suite,

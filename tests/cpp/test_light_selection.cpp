@@ -142,7 +142,8 @@ void expect_weighted_picks_in_group(const RenderScene& rs, int g, const Vec3f& p
     Vec3f d = p - lw.centre;
     double d2 = dot(d, d);
     w[i] = lw.local ? lw.power / (4.0 * k_pi_d * std::max(d2, double(lw.radius2))) : lw.power;
-    if (lw.oriented && d2 > lw.radius2) {
+    if (lw.directional) w[i] = lw.directional->selection_intensity(p) / std::max(d2, double(lw.radius2));
+    else if (lw.oriented && d2 > lw.radius2) {
       // The emission angle's lower bound: the angle to the cone's axis less its half-angle and
       // the sphere's angular radius.
       double theta = std::acos(std::clamp(double(dot(lw.axis, d)) / std::sqrt(d2), -1.0, 1.0)) - lw.cone_angle -
@@ -252,4 +253,43 @@ TEST(light_selection, weighed_picks_of_every_light_kind_are_consistent) {
   expect_weighted_picks(rs, Vec3f(0.f, 0.f, 0.f), 905);
   expect_weighted_picks(rs, Vec3f(0.1f, 0.9f, 1.f), 906);
   expect_weighted_picks(rs, Vec3f(0.f, 3.f, 1.f), 907);
+}
+
+// Delta lights whose intensity varies with direction (spot, headlamp) are weighed by the
+// intensity they send towards the shading point / d^2 -- their exact unoccluded irradiance
+// there: nothing outside a spot's cone or behind a headlamp, and in a headlamp's beam the
+// headlamp rather than a street lamp's spot whose flux is larger.
+TEST(light_selection, beams_are_weighed_by_their_intensity_towards_the_point) {
+  Scene s;
+  TriangleMesh big = ground_quad();
+  for (Vec3f& v : big.positions) v = Vec3f(v.x * 20.f, v.y, v.z * 20.f);
+  s.add_instance(s.add_mesh(big), Transform());
+  ParamSet street = spot(0.15);  // 5000 cd at strength 0.02, 8 m up, 70-degree cone
+  street.set("position", std::vector<double>{0.0, 8.0, -6.0});
+  street.set("cone_angle", 70.0);
+  street.set("falloff_start", 50.0);
+  ParamSet head;
+  head.set("position", std::vector<double>{-10.0, 0.65, 0.0});
+  head.set("direction", std::vector<double>{1.0, 0.0, 0.0});
+  head.set("intensity", 0.44);  // 15 kcd at strength 0.02
+  uint32_t spot_i = s.add_light("spot", street);
+  uint32_t head_i = s.add_light("headlamp", head);
+  s.commit();
+  const RenderScene& rs = s.render_scene();
+  ASSERT_EQ(rs.light_weights[spot_i].directional, rs.lights[spot_i]);
+  ASSERT_EQ(rs.light_weights[head_i].directional, rs.lights[head_i]);
+  // A point on the road 12 m ahead of the headlamp, 8.5 m from under the street lamp.
+  Vec3f p(2.f, 0.f, 0.f);
+  LightSampleContext ctx{p, Vec3f(0.f)};
+  LightSample a, b;
+  ASSERT_TRUE(rs.lights[spot_i]->sample(ctx, Vec2f(0.5f, 0.5f), &a));
+  ASSERT_TRUE(rs.lights[head_i]->sample(ctx, Vec2f(0.5f, 0.5f), &b));
+  float share = luminance(b.li) / (luminance(a.li) + luminance(b.li));
+  EXPECT_NEAR(rs.light_pmf(p, head_i), share, 1e-4f);
+  EXPECT_GT(share, 0.5f);  // by flux the headlamp would get a few percent
+  // Behind the headlamp and outside the spot's cone: never picked there.
+  EXPECT_EQ(rs.light_pmf(Vec3f(-15.f, 0.f, 0.f), head_i), 0.f);
+  EXPECT_EQ(rs.light_pmf(Vec3f(0.f, 0.f, 25.f), spot_i), 0.f);
+  expect_weighted_picks(rs, p, 908);
+  expect_weighted_picks(rs, Vec3f(-3.f, 0.f, 2.f), 909);
 }

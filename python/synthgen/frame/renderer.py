@@ -84,6 +84,9 @@ class FrameRenderer:
         self.shapes = Shapes(self.scene)
         self.pool = Pool()                # object instances, id k for the frame's object k
         self.decor = Pool()               # unlabelled posts and poles below signs and plates
+        #: Unlabelled geometry of the weather conditions (street lights' poles), a pool per
+        #: condition: every instance is hidden before the frame's conditions apply.
+        self.weather_pools: Dict[str, Pool] = {}
         self.slots: List[int] = []        # material slot k of object k, updated in place
         self.library = FrameLibrary(self.scene)   # this frame's generated textures and materials
         self.lights: List[int] = []
@@ -231,13 +234,17 @@ class FrameRenderer:
             photo_info = dict(photo_info or {})
             photo_info["dome"] = self._add_dome(fp, camera, keep, objects, render_seed)
         self.scene.set_camera(camera)
-        weather_ctx = self._apply_weather(spec, fp)
+        weather_ctx = self._apply_weather(spec, fp, camera, render_seed)
         self.scene.commit()
         from ..post.quality import exposure_scale
 
         if rs["denoise"] and fp is not None:  # check_inputs reports it at the YAML key first
             raise SynthgenError("render.denoise is not available with photo backgrounds yet")
-        res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure_scale(spec.post),
+        # The scene's exposure: the post steps' and the weather's own (auto-exposure at night).
+        exposure = exposure_scale(spec.post)
+        for c in weather_ctx.values():
+            exposure *= c.exposure
+        res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure,
                                 **{k: rs[k] for k in RENDER_KEYS if k != "threads"})
         t_render = time.perf_counter()
 
@@ -278,7 +285,7 @@ class FrameRenderer:
             "sampled": spec.sampled, "class_names": list(sc.class_names), "negative": spec.negative,
             # The render's estimated error against its converged image (from its half-sample
             # images; after the scene's exposure): synthgen.post.quality.
-            "noise": self._noise(res, spec.post),
+            "noise": self._noise(res, exposure),
             # The frame's weather (docs/weather.md): {condition: its parameters}, or none.
             "weather": ({key: {**params, **(weather_ctx[key].extra)} for key, params in spec.weather}
                         if spec.weather else None),
@@ -328,24 +335,31 @@ class FrameRenderer:
             timings["photo_s"] = time.perf_counter() - t_render
         return arrays, meta, timings
 
-    def _apply_weather(self, spec: FrameSpec, fp: Any) -> Dict[str, "weather.WeatherContext"]:
+    def _apply_weather(self, spec: FrameSpec, fp: Any, camera: Any = None, seed: int = 0
+                       ) -> Dict[str, "weather.WeatherContext"]:
         """The frame's weather conditions applied to the scene (the previous frame's medium
-        removed first); {condition key: its context} for their image-space steps and meta."""
+        removed first, and the conditions' geometry hidden); {condition key: its context} for
+        their image-space steps and meta."""
         if self.scene.medium_type() is not None:
             self.scene.clear_medium()
+        for pool in self.weather_pools.values():
+            for inst in pool.ids:
+                if self.scene.instance_visible(inst):
+                    self.scene.set_instance_visible(inst, False)
         out = {}
         for key, params in spec.weather:
-            ctx = weather.WeatherContext(self, weather.condition_rng(self.sc.seed, spec.frame, key), fp)
+            ctx = weather.WeatherContext(self, weather.condition_rng(self.sc.seed, spec.frame, key), fp,
+                                         camera=camera, seed=int(seed))
             ctx.extra.update(weather.condition(key).apply(ctx, params) or {})
             out[key] = ctx
         return out
 
     @staticmethod
-    def _noise(res: Any, post_steps: Any) -> Optional[Dict[str, float]]:
-        from ..post.quality import estimate_noise, exposure_scale
+    def _noise(res: Any, exposure: float) -> Optional[Dict[str, float]]:
+        from ..post.quality import estimate_noise
 
         count = np.asarray(res.sample_count)
-        est = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), count, exposure_scale(post_steps))
+        est = estimate_noise(np.asarray(res.rgb_even), np.asarray(res.rgb_odd), count, float(exposure))
         if est is None:
             return None
         # spp: the mean over the pixels (adaptive sampling gives each pixel its own count).
@@ -355,6 +369,15 @@ class FrameRenderer:
     # -- scene set-up of one frame --------------------------------------------------------
     def _set_lights(self, lights: List[PluginSpec]) -> None:
         self._set_light_plugins([light_plugin(li) for li in lights])
+
+    def replace_lights(self, lights: List[Tuple[str, Dict[str, Any]]]) -> None:
+        """Replaces the frame's lights by these (plugin, parameters) (a weather condition's
+        time of day); the metadata lists them."""
+        self._set_light_plugins(lights)
+
+    def weather_pool(self, key: str) -> Pool:
+        """The pool of a weather condition's unlabelled instances (hidden at every frame's start)."""
+        return self.weather_pools.setdefault(key, Pool())
 
     def _set_light_plugins(self, lights: List[Tuple[str, Dict[str, Any]]]) -> None:
         for lid in self.lights:
@@ -443,9 +466,17 @@ class FrameRenderer:
                                       roles=shape.roles if model else None,
                                       lamps=shape.lamps if model else None,
                                       lamp_material=shape.lamp_material if model else None)
+        # Values the frame's weather gives where the scenario gives none (night: lamps on).
+        values = dict(o.randomizers)
+        for key, params in spec.weather:
+            extra = weather.condition(key).object_values(
+                params, spec, o, shape, weather.condition_rng(spec.seed, spec.frame, f"{key}:object:{k}"))
+            for rk, v in (extra or {}).items():
+                if values.get(rk) is None:
+                    values[rk] = v
         done = {}
         for r in randomize.randomizers(by="apply_order"):
-            value = o.randomizers.get(r.key)
+            value = values.get(r.key)
             if value is not None:
                 mats, info = r.apply(ctx, value, mats)
                 if info is not None:

@@ -21,8 +21,14 @@ Protocol (:class:`Condition`):
 - :meth:`Condition.check` -- what the scenario's inputs must satisfy (photo backgrounds and
   their depth maps, ...), reported at the condition's key before anything renders;
 - :meth:`Condition.params` -- the drawn values as the frame's plain parameters (meta);
+- :meth:`Condition.object_values` -- randomizer values the condition gives the frame's objects
+  that their scenario entry leaves unset (night: every vehicle's lamps on), before the
+  randomizers apply;
 - :meth:`Condition.apply` -- changes the frame's scene before it renders (a medium, materials,
-  lights, the sky); returns what to add to the metadata;
+  lights, the sky, unlabelled geometry in the renderer's pool for the condition); may set the
+  context's ``exposure`` (the factor the condition's image-space step multiplies the image by,
+  which the render's own exposure includes: auto-exposure); returns what to add to the
+  metadata;
 - :meth:`Condition.post` -- an image-space step after the render (rain streaks; fog on photos
   from their depth): a pure function of the arrays, the parameters and a generator.
 
@@ -61,6 +67,11 @@ class WeatherContext:
     #: computes it itself (fog on photos); else the renderer asks the scene's medium.
     transmittance: Optional[np.ndarray] = None
     extra: Dict[str, Any] = field(default_factory=dict)
+    camera: Any = None            #: the frame's camera
+    seed: int = 0                 #: the frame's render seed (for a condition's own pre-passes)
+    #: The factor this condition's image-space step multiplies the image by (auto-exposure);
+    #: the render's exposure (clamping, adaptive sampling, the noise estimate) includes it.
+    exposure: float = 1.0
 
 
 class Condition:
@@ -81,6 +92,13 @@ class Condition:
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
         """The frame's parameters from the drawn values (plain numbers; recorded in meta)."""
         return {k: _plain(v) for k, v in value.items() if k != "probability"}
+
+    def object_values(self, params: Mapping[str, Any], spec: Any, obj: Any, shape: Any,
+                      rng: np.random.Generator) -> Optional[Dict[str, Any]]:
+        """{randomizer key: value} for one of the frame's objects (``obj``, an ObjectSpec, of
+        ``shape``), used where its scenario entry gives that randomizer no value; ``spec`` is the
+        frame's FrameSpec, ``rng`` a generator of this condition and object. Default: none."""
+        return None
 
     def apply(self, ctx: WeatherContext, params: Mapping[str, Any]) -> Optional[Dict[str, Any]]:
         """Changes the frame's scene before it renders; returns extra metadata or None."""
