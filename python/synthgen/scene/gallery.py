@@ -195,7 +195,12 @@ def render_car_row(tile_w: int = 640, tile_h: int = 480, spp: int = 32) -> np.nd
 WEATHER_TILES: List[Tuple[str, Dict[str, Any]]] = [
     ("clear", {}),
     ("fog", {"fog": {"visibility": 120.0, "top": 30.0}}),
-    ("haze", {"haze": {"visibility": 3000.0, "top": 800.0}}),
+    ("ground fog", {"ground_fog": {"visibility": 30.0, "scale_height": 2.5, "coverage": 0.6, "feature_size": 30.0}}),
+    ("clouds", {"clouds": {"visibility": 60.0, "bottom": 300.0, "top": 700.0, "coverage": 0.6}}),
+    ("wet", {"wet": {"wetness": 0.9, "puddles": 0.15}}),
+    ("snow", {"snow": {"amount": 0.9}}),
+    ("dusk", {"dusk": {}}),
+    ("night", {"night": {}}),
 ]
 
 

@@ -104,7 +104,8 @@ class Condition:
         """Changes the frame's scene before it renders; returns extra metadata or None."""
         return None
 
-    def post(self, ctx: WeatherContext, arrays: Dict[str, np.ndarray], params: Mapping[str, Any]) -> Dict[str, np.ndarray]:
+    def post(self, ctx: WeatherContext, arrays: Dict[str, np.ndarray],
+             params: Mapping[str, Any]) -> Dict[str, np.ndarray]:
         """The image-space step after the render (default: none)."""
         return arrays
 
