@@ -186,7 +186,7 @@ class TimeOfDay(Condition):
 
     group = "light"
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any) -> None:
+    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
         if spec.get("background") is not None:
             fail("not available with photo backgrounds: the photo has its own time of day")
 
