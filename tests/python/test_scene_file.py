@@ -138,7 +138,7 @@ def test_missing_required_key_points_at_the_entry(tmp_path):
 def test_missing_light_type_lists_types(tmp_path):
     e = error_of(write(tmp_path, CAMERA + "objects: [{primitive: box, class_id: 1}]\nlights: [{irradiance: 3}]\n"))
     assert e.key_path == "lights[0]" and "missing required key 'type'" in str(e)
-    assert "environment, envmap, point, sky, spot, sun" in str(e)
+    assert "environment, envmap, headlamp, point, sky, spot, sun, twilight" in str(e)
 
 
 def test_exclusive_and_one_of_groups(tmp_path):
