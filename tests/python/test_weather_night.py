@@ -130,8 +130,8 @@ def test_headlamp_beams_light_the_road_ahead(tmp_path):
     _asset(CAR)
     weather = ("weather: {night: {elevation: -30, sky_glow: 0, moon: {probability: 0}, exposure: {ev: 0}, "
                "lamps: {high_beam: 0, beams: %s}, street_lights: {enabled: false}}}")
-    kw = dict(w=120, h=80, spp=64, eye="[-2, 6, 6]", target="[8, 0, 0]", objects=f"{{class: car, asset: {CAR}, yaw: 0}}",
-              region="[-0.01, -0.01, 0.01, 0.01]")
+    kw = dict(w=120, h=80, spp=64, eye="[-2, 6, 6]", target="[8, 0, 0]",
+              objects=f"{{class: car, asset: {CAR}, yaw: 0}}", region="[-0.01, -0.01, 0.01, 0.01]")
     on = _run(tmp_path, "on", weather % "true", **kw)
     off = _run(tmp_path, "off", weather % "false", **kw)
     meta = _meta(on)
