@@ -29,7 +29,6 @@ sys.path.insert(0, os.path.join(REPO, "python"))
 SCENARIO = os.path.join(REPO, "scenarios", "weather.yaml")
 FOG = {"fog": {"visibility": 100.0, "top": 40.0}}
 GROUND_FOG = {"ground_fog": {"visibility": 40.0, "scale_height": 3.0}}
-NIGHT = {"night": {}}
 
 
 def main(argv=None) -> int:
@@ -44,6 +43,10 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from synthgen.randomize import weather as W
+
+    from synthgen.randomize.weather.night import street_night
+
+    NIGHT = street_night()  # the same street at night: street lights outside the plot, lamps on
 
     known = {c.key for c in W.conditions()}
     cases = [(name, w) for name, w in (("clear", {}), ("fog", FOG), ("ground_fog", GROUND_FOG), ("night", NIGHT))
