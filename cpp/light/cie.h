@@ -24,4 +24,13 @@ inline Color xyY_to_linear_srgb(double x, double y, double big_y) {
   return xyz_to_linear_srgb(x * big_y / y, big_y, (1.0 - x - y) * big_y / y);
 }
 
+/// Linear sRGB -> CIE chromaticity (x, y): the inverse of xyz_to_linear_srgb's matrix (IEC
+/// 61966-2-1, D65, Lindbloom's 7 digits), then x = X / (X + Y + Z), y = Y / (X + Y + Z).
+inline void linear_srgb_to_xy(const Color& c, double* x, double* y) {
+  double cx = 0.4124564 * c.x + 0.3575761 * c.y + 0.1804375 * c.z;
+  double cy = 0.2126729 * c.x + 0.7151522 * c.y + 0.0721750 * c.z;
+  double cz = 0.0193339 * c.x + 0.1191920 * c.y + 0.9503041 * c.z;
+  *x = cx / (cx + cy + cz), *y = cy / (cx + cy + cz);
+}
+
 }  // namespace sg

@@ -26,11 +26,7 @@ class ConstantEnvironment final : public Light {
       out->wi = square_to_uniform_sphere(u);
       out->pdf = uniform_sphere_pdf();
     }
-    out->li = m_radiance;
-    out->delta = false;
-    out->infinite = true;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
+    set_infinite_sample(out, out->wi, m_radiance, out->pdf);
     return true;
   }
   float pdf_li(const LightSampleContext& ctx, const Vec3f& dir) const override {

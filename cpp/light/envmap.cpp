@@ -88,13 +88,7 @@ class EnvMapLight final : public Light {
     Vec3f d = to_map(wi);
     float pdf = m_sampler.pdf(d);
     if (!(pdf > 0.f)) return false;
-    out->wi = wi;
-    out->li = m_pixels[m_sampler.pixel(d)];
-    out->pdf = pdf;
-    out->delta = false;
-    out->infinite = true;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
+    set_infinite_sample(out, wi, m_pixels[m_sampler.pixel(d)], pdf);
     return true;
   }
   /// NOTE: like "environment", power = pi r^2 (disc of the scene's bounding sphere) x 4 pi x

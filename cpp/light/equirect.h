@@ -62,6 +62,18 @@ class EquirectSampler {
     m_dist = Distribution2D(w, size_t(width), size_t(height));
   }
 
+  /// The sampler of a width x height table of the luminance that `radiance` (a function of the
+  /// map-space direction, returning a Color) has at the pixel centres.
+  template <typename Radiance>
+  static EquirectSampler of_radiance(int width, int height, const Radiance& radiance) {
+    std::vector<float> lum(size_t(width) * height);
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x)
+        lum[size_t(y) * width + x] =
+            luminance(radiance(equirect_direction(Vec2f((x + 0.5f) / width, (y + 0.5f) / height))));
+    return EquirectSampler(lum, width, height);
+  }
+
   int width() const { return m_width; }
   int height() const { return m_height; }
   /// Solid-angle average of the values over the sphere.

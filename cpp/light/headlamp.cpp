@@ -51,21 +51,8 @@ class HeadlampLight final : public Light {
     m_right = cross(m_forward, m_up);
   }
   bool sample(const LightSampleContext& ctx, const Vec2f&, LightSample* out) const override {
-    Vec3f d = m_pos - ctx.p;
-    float dist2 = length_squared(d);
-    if (!(dist2 > 0.f)) return false;
-    Vec3f wi = d / std::sqrt(dist2);
-    float rel = relative_intensity(-wi);
-    if (!(rel > 0.f)) return false;
-    out->wi = wi;
-    out->li = m_intensity * (rel / dist2);
-    out->pdf = 1.f;
-    out->p_light = m_pos;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
-    out->delta = true;
-    out->infinite = false;
-    return true;
+    return sample_point_emitter(ctx, m_pos, m_intensity, [this](const Vec3f& w) { return relative_intensity(w); },
+                                out);
   }
   /// For the power-only light choice (RenderScene::group_pick, when a scene has very many
   /// lights): an isotropic lamp of the beam's peak intensity, 4 pi I_max, as pbrt-v4's

@@ -44,6 +44,41 @@ struct LightSample {
   bool infinite = false;  ///< the shadow ray goes to infinity
 };
 
+/// Fills `out` with a sample of an infinite light (no point, no normal; not a delta): direction,
+/// radiance and solid-angle pdf.
+inline void set_infinite_sample(LightSample* out, const Vec3f& wi, const Color& li, float pdf) {
+  out->wi = wi;
+  out->li = li;
+  out->pdf = pdf;
+  out->delta = false;
+  out->infinite = true;
+  out->p_light_error = Vec3f(0.f);
+  out->n_light = Vec3f(0.f);
+}
+
+/// Fills `out` with the sample of a point emitter at `pos` seen from ctx.p (a delta light): its
+/// `intensity` times `profile(w)` -- in [0, 1] along the unit direction w from the emitter; 0: no
+/// light that way, no sample -- over the squared distance (point, spot, headlamp).
+template <typename Profile>
+bool sample_point_emitter(const LightSampleContext& ctx, const Vec3f& pos, const Color& intensity,
+                          const Profile& profile, LightSample* out) {
+  const Vec3f d = pos - ctx.p;
+  const float dist2 = length_squared(d);
+  if (!(dist2 > 0.f)) return false;
+  const Vec3f wi = d / std::sqrt(dist2);
+  const float f = profile(-wi);
+  if (!(f > 0.f)) return false;
+  out->wi = wi;
+  out->li = intensity * (f / dist2);
+  out->pdf = 1.f;
+  out->p_light = pos;
+  out->p_light_error = Vec3f(0.f);
+  out->n_light = Vec3f(0.f);
+  out->delta = true;
+  out->infinite = false;
+  return true;
+}
+
 class Light {
  public:
   virtual ~Light() = default;

@@ -7,18 +7,7 @@ class PointLight final : public Light {
  public:
   PointLight(const Vec3f& pos, const Color& intensity) : m_pos(pos), m_intensity(intensity) {}
   bool sample(const LightSampleContext& ctx, const Vec2f&, LightSample* out) const override {
-    Vec3f d = m_pos - ctx.p;
-    float dist2 = length_squared(d);
-    if (!(dist2 > 0.f)) return false;
-    out->wi = d / std::sqrt(dist2);
-    out->li = m_intensity / dist2;
-    out->pdf = 1.f;
-    out->p_light = m_pos;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
-    out->delta = true;
-    out->infinite = false;
-    return true;
+    return sample_point_emitter(ctx, m_pos, m_intensity, [](const Vec3f&) { return 1.f; }, out);
   }
   float power() const override { return 4.f * k_pi * luminance(m_intensity); }
   bool is_delta() const override { return true; }

@@ -241,12 +241,8 @@ class SkyLight final : public Light {
     m_ground = Color(float(e_h[0] / k_pi_d), float(e_h[1] / k_pi_d), float(e_h[2] / k_pi_d)) * ground_albedo;
 
     // Sampling table: luminance at the pixel centres.
-    std::vector<float> lum(size_t(k_table_width) * k_table_height);
-    for (int y = 0; y < k_table_height; ++y)
-      for (int x = 0; x < k_table_width; ++x)
-        lum[size_t(y) * k_table_width + x] =
-            luminance(sky_radiance(equirect_direction(Vec2f((x + 0.5f) / k_table_width, (y + 0.5f) / k_table_height))));
-    m_sampler = EquirectSampler(lum, k_table_width, k_table_height);
+    m_sampler = EquirectSampler::of_radiance(k_table_width, k_table_height,
+                                             [this](const Vec3f& d) { return sky_radiance(d); });
 
     // NOTE: a one-sample mixture of the two strategies (Veach 1997, sec. 9.2.4, with the
     // balance heuristic: the density is the mixture density), sun vs sky table in proportion
@@ -274,13 +270,7 @@ class SkyLight final : public Light {
     // and pdf_le() report them.
     float pdf = pdf_le(wi);
     if (!(pdf > 0.f)) return false;
-    out->wi = wi;
-    out->li = le(wi);
-    out->pdf = pdf;
-    out->delta = false;
-    out->infinite = true;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
+    set_infinite_sample(out, wi, le(wi), pdf);
     return true;
   }
   /// NOTE: as "environment" and "sun": pi r^2 x (4 pi x mean sky luminance + sun irradiance).
@@ -318,13 +308,7 @@ class SkyLight final : public Light {
       Vec3f wi = normalize(m_sky.m_sampler.sample(u));
       float pdf = m_sky.m_sampler.pdf(wi);
       if (!(pdf > 0.f)) return false;
-      out->wi = wi;
-      out->li = m_sky.sky_radiance(wi);
-      out->pdf = pdf;
-      out->delta = false;
-      out->infinite = true;
-      out->p_light_error = Vec3f(0.f);
-      out->n_light = Vec3f(0.f);
+      set_infinite_sample(out, wi, m_sky.sky_radiance(wi), pdf);
       return true;
     }
     float power() const override { return k_pi * m_sky.m_radius * m_sky.m_radius * m_sky.m_sky_power; }

@@ -23,21 +23,8 @@ class SpotLight final : public Light {
     m_cos_start = std::cos(start_deg * k_pi / 180.f);
   }
   bool sample(const LightSampleContext& ctx, const Vec2f&, LightSample* out) const override {
-    Vec3f d = m_pos - ctx.p;
-    float dist2 = length_squared(d);
-    if (!(dist2 > 0.f)) return false;
-    Vec3f wi = d / std::sqrt(dist2);
-    float falloff = this->falloff(-dot(wi, m_axis));
-    if (falloff == 0.f) return false;
-    out->wi = wi;
-    out->li = m_intensity * (falloff / dist2);
-    out->pdf = 1.f;
-    out->p_light = m_pos;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
-    out->delta = true;
-    out->infinite = false;
-    return true;
+    return sample_point_emitter(ctx, m_pos, m_intensity, [this](const Vec3f& w) { return falloff(dot(w, m_axis)); },
+                                out);
   }
   /// NOTE: pbrt-v4 SpotLight::Phi: the smoothstep in cos(theta) integrates to half the
   /// falloff band, so Phi = I 2 pi (1 - (cos_start + cos_end) / 2).

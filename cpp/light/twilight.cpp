@@ -210,12 +210,7 @@ class TwilightLight final : public Light {
       p.set("sun", false);
       p.set("ground_albedo", 0.0);
       m_day = create_light("sky", p, "twilight: the day sky at sunset");
-      Color z = m_day->le(Vec3f(0.f, 1.f, 0.f));
-      // Linear sRGB -> XYZ (IEC 61966-2-1, D65: light/cie.h's inverse).
-      double cx = 0.4124564 * z.x + 0.3575761 * z.y + 0.1804375 * z.z;
-      double cy = 0.2126729 * z.x + 0.7151522 * z.y + 0.0721750 * z.z;
-      double cz = 0.0193339 * z.x + 0.1191920 * z.y + 0.9503041 * z.z;
-      zenith_x = cx / (cx + cy + cz), zenith_y = cy / (cx + cy + cz);
+      linear_srgb_to_xy(m_day->le(Vec3f(0.f, 1.f, 0.f)), &zenith_x, &zenith_y);
     }
     m_shape = TwilightShape(dep, zenith_x, zenith_y);
 
@@ -253,12 +248,7 @@ class TwilightLight final : public Light {
     m_ground = Color(float(e_h.x / k_pi_d), float(e_h.y / k_pi_d), float(e_h.z / k_pi_d)) * ground_albedo *
                float(m_scale);
 
-    std::vector<float> lum(size_t(k_table_width) * k_table_height);
-    for (int y = 0; y < k_table_height; ++y)
-      for (int x = 0; x < k_table_width; ++x)
-        lum[size_t(y) * k_table_width + x] =
-            luminance(le(equirect_direction(Vec2f((x + 0.5f) / k_table_width, (y + 0.5f) / k_table_height))));
-    m_sampler = EquirectSampler(lum, k_table_width, k_table_height);
+    m_sampler = EquirectSampler::of_radiance(k_table_width, k_table_height, [this](const Vec3f& d) { return le(d); });
     m_power = 4.f * k_pi * m_sampler.mean();
   }
 
@@ -266,13 +256,7 @@ class TwilightLight final : public Light {
     Vec3f wi = normalize(m_sampler.sample(u));
     float pdf = m_sampler.pdf(wi);
     if (!(pdf > 0.f)) return false;
-    out->wi = wi;
-    out->li = le(wi);
-    out->pdf = pdf;
-    out->delta = false;
-    out->infinite = true;
-    out->p_light_error = Vec3f(0.f);
-    out->n_light = Vec3f(0.f);
+    set_infinite_sample(out, wi, le(wi), pdf);
     return true;
   }
   /// NOTE: as "environment" and "sky": pi r^2 x 4 pi x mean luminance.

@@ -12,7 +12,7 @@
 #include "core/error.h"
 #include "core/noise.h"
 #include "core/plugin.h"
-#include "medium/noise_mask.h"
+#include "medium/noise_field.h"
 #include "medium/tracking.h"
 
 namespace sg {
@@ -22,39 +22,26 @@ namespace {
 class CloudDeck final : public TrackedMedium {
  public:
   struct Shape {
-    float bottom, top, extent, feature_size, feature_height, base_sharpness;
-    Vec3f wind;
+    float bottom, top, extent, base_sharpness;
   };
-  CloudDeck(float sigma, const Color& albedo, float g, const Shape& shape, const FractalParams& fp, float coverage,
-            float contrast, uint64_t seed, const Vec3f& cells)
-      : TrackedMedium(sigma, albedo, g, quadrature_step_for(shape, fp)),
+  CloudDeck(float sigma, const Color& albedo, float g, const Shape& shape, const NoiseField& field, float coverage,
+            float contrast, const int cells[3])
+      : TrackedMedium(sigma, albedo, g, field.quadrature_step(0.05f)),
         m_shape(shape),
-        m_noise(seed),
-        m_fractal(fp),
-        m_mask(m_fractal, coverage, contrast) {
-    m_inv_scale = Vec3f(1.f / shape.feature_size, 1.f / shape.feature_height, 1.f / shape.feature_size);
+        m_field(field),
+        m_mask(m_field.fractal(), coverage, contrast) {
     // The erosion at the top: the threshold rises by this many noise deviations.
     m_erosion = 2.5f * m_mask.sigma_f;
     Box3 box{Vec3f(-shape.extent, shape.bottom, -shape.extent), Vec3f(shape.extent, shape.top, shape.extent)};
-    m_grid.build(box, int(cells.x), int(cells.y), int(cells.z),
-                 [this](const Vec3f& lo, const Vec3f& hi) { return bounds(lo, hi); });
+    m_grid.build(box, cells[0], cells[1], cells[2], [this](const Vec3f& lo, const Vec3f& hi) { return bounds(lo, hi); });
   }
 
   float density(const Vec3f& p) const override {
     const float h = (p.y - m_shape.bottom) / (m_shape.top - m_shape.bottom);
-    const float n = fbm(m_noise, NoiseKind::Perlin, noise_point(p), m_fractal);
-    return base(h) * m_mask(n - m_erosion * rise(h));
+    return base(h) * m_mask(m_field(p) - m_erosion * rise(h));
   }
 
  private:
-  static float quadrature_step_for(const Shape& s, const FractalParams& fp) {
-    const float finest = std::min(s.feature_height, s.feature_size) / std::pow(fp.lacunarity, float(fp.octaves - 1));
-    return std::max(0.25f * finest, 0.05f);
-  }
-  Vec3f noise_point(const Vec3f& p) const {
-    const Vec3f q = p - m_shape.wind;
-    return Vec3f(q.x * m_inv_scale.x, q.y * m_inv_scale.y, q.z * m_inv_scale.z);
-  }
   /// The base: the density rises over the lowest 1 / base_sharpness of the layer (increasing in h).
   float base(float h) const { return smoothstep(0.f, 1.f / m_shape.base_sharpness, h); }
   /// The threshold's rise with height (increasing in h): none in the lower third, the full erosion
@@ -62,7 +49,7 @@ class CloudDeck final : public TrackedMedium {
   static float rise(float h) { return smoothstep(0.3f, 1.f, h); }
   DensityBounds bounds(const Vec3f& lo, const Vec3f& hi) const {
     float n_lo, n_hi;
-    fbm_range(m_noise, noise_point(lo), noise_point(hi), m_fractal, &n_lo, &n_hi);
+    m_field.range(lo, hi, &n_lo, &n_hi);
     const float h0 = (lo.y - m_shape.bottom) / (m_shape.top - m_shape.bottom);
     const float h1 = (hi.y - m_shape.bottom) / (m_shape.top - m_shape.bottom);
     // NOTE: density = base(h) x mask(n - e rise(h)), base and rise increasing in h, mask
@@ -77,10 +64,8 @@ class CloudDeck final : public TrackedMedium {
   }
 
   Shape m_shape;
-  NoiseBasis m_noise;
-  Fractal m_fractal;
+  NoiseField m_field;
   CoverageMask m_mask;
-  Vec3f m_inv_scale{1.f};
   float m_erosion = 0.f;
 };
 
@@ -105,17 +90,7 @@ PluginInfo info() {
       .add(param::real("base_sharpness", 12.0, "the density rises over the lowest 1 / base_sharpness of the "
                                                "layer: larger, flatter and sharper bases")
                .at_least(1))
-      .add(param::real("feature_size", 500.0, "horizontal size in metres of the billows (the noise's coarsest "
-                                              "lattice spacing)")
-               .above(0))
-      .add(param::real("feature_height", 350.0, "vertical size in metres of the billows' noise").above(0))
-      .add(param::integer("octaves", 6, "octaves of the fBm noise").in(1, 10))
-      .add(param::integer("seed", 0, "seed of the noise").at_least(0))
-      .add(param::vec3("wind", Vec3f(0.f), "offset in metres of the noise field (wind velocity x time)"))
-      .add(param::real("extent", 5000.0, "half-width in metres of the clouded square around the origin").above(0))
-      .add(param::vec3("majorant_cells", Vec3f(64.f, 16.f, 64.f), "cells of the majorant grid along x, y, z "
-                                                                  "(whole numbers)")
-               .in(1, 512));
+      .add(noise_field_params("billows", 500.0, 350.0, 6, 5000.0));
 }
 
 std::shared_ptr<Medium> create(const Params& params, const PluginContext&) {
@@ -123,22 +98,15 @@ std::shared_ptr<Medium> create(const Params& params, const PluginContext&) {
   s.bottom = params.get_float("bottom");
   s.top = params.get_float("top");
   s.extent = params.get_float("extent");
-  s.feature_size = params.get_float("feature_size");
-  s.feature_height = params.get_float("feature_height");
   s.base_sharpness = params.get_float("base_sharpness");
-  s.wind = params.get_vec3("wind");
   if (!(s.top > s.bottom))
     throw Error("medium 'clouds': top (" + std::to_string(s.top) + ") must be above bottom (" +
                 std::to_string(s.bottom) + ")");
-  const Vec3f cells = params.get_vec3("majorant_cells");
-  for (int a = 0; a < 3; ++a)
-    if (cells[a] != std::floor(cells[a]))
-      throw Error("medium 'clouds': majorant_cells must be whole numbers, got " + std::to_string(cells[a]));
-  FractalParams fp;
-  fp.octaves = int(params.get_int("octaves"));
+  int cells[3];
+  whole_numbers(params, "majorant_cells", "clouds", cells);
   return std::make_shared<CloudDeck>(extinction_from(params), params.get_color("albedo"), params.get_float("g"), s,
-                                     fp, params.get_float("coverage"), params.get_float("contrast"),
-                                     uint64_t(params.get_int("seed")), cells);
+                                     NoiseField(params), params.get_float("coverage"), params.get_float("contrast"),
+                                     cells);
 }
 
 }  // namespace

@@ -140,14 +140,7 @@ std::shared_ptr<Medium> create(const Params& params, const PluginContext&) {
   DenseGrid grid;
   std::string source;
   const bool vdb = params.has("file") && ends_with(params.get_string("file"), ".vdb");
-  auto whole3 = [&](const char* key, int out[3]) {
-    const Vec3f v = params.get_vec3(key);
-    for (int a = 0; a < 3; ++a) {
-      if (v[a] != std::floor(v[a]))
-        throw Error("medium 'grid': " + std::string(key) + " must be whole numbers, got " + std::to_string(v[a]));
-      out[a] = int(v[a]);
-    }
-  };
+  auto whole3 = [&](const char* key, int out[3]) { whole_numbers(params, key, "grid", out); };
   if (vdb) {
     source = "vdb file '" + params.get_string("file") + "'";
     if (params.has("resolution"))

@@ -14,7 +14,7 @@
 #include "core/error.h"
 #include "core/noise.h"
 #include "core/plugin.h"
-#include "medium/noise_mask.h"
+#include "medium/noise_field.h"
 #include "medium/tracking.h"
 
 namespace sg {
@@ -24,43 +24,28 @@ namespace {
 class GroundFog final : public TrackedMedium {
  public:
   struct Shape {
-    float base, scale_height, top, extent, feature_size, feature_height;
-    Vec3f wind;
+    float base, scale_height, top, extent;
   };
-  GroundFog(float sigma, const Color& albedo, float g, const Shape& shape, const FractalParams& fp, float coverage,
-            float contrast, uint64_t seed, const Vec3f& cells)
-      : TrackedMedium(sigma, albedo, g, quadrature_step_for(shape, fp)),
+  GroundFog(float sigma, const Color& albedo, float g, const Shape& shape, const NoiseField& field, float coverage,
+            float contrast, const int cells[3])
+      : TrackedMedium(sigma, albedo, g, field.quadrature_step(0.02f)),
         m_shape(shape),
-        m_noise(seed),
-        m_fractal(fp),
-        m_mask(m_fractal, coverage, contrast) {
-    m_inv_scale = Vec3f(1.f / shape.feature_size, 1.f / shape.feature_height, 1.f / shape.feature_size);
+        m_field(field),
+        m_mask(m_field.fractal(), coverage, contrast) {
     Box3 box{Vec3f(-shape.extent, shape.base - shape.scale_height, -shape.extent),
              Vec3f(shape.extent, shape.top, shape.extent)};
-    m_grid.build(box, int(cells.x), int(cells.y), int(cells.z),
-                 [this](const Vec3f& lo, const Vec3f& hi) { return bounds(lo, hi); });
+    m_grid.build(box, cells[0], cells[1], cells[2], [this](const Vec3f& lo, const Vec3f& hi) { return bounds(lo, hi); });
   }
 
-  float density(const Vec3f& p) const override {
-    return profile(p.y) * m_mask(fbm(m_noise, NoiseKind::Perlin, noise_point(p), m_fractal));
-  }
+  float density(const Vec3f& p) const override { return profile(p.y) * m_mask(m_field(p)); }
 
  private:
-  static float quadrature_step_for(const Shape& s, const FractalParams& fp) {
-    // A quarter of the finest octave's lattice spacing (vertically, the smallest).
-    const float finest = std::min(s.feature_height, s.feature_size) / std::pow(fp.lacunarity, float(fp.octaves - 1));
-    return std::max(0.25f * finest, 0.02f);
-  }
-  Vec3f noise_point(const Vec3f& p) const {
-    const Vec3f q = p - m_shape.wind;
-    return Vec3f(q.x * m_inv_scale.x, q.y * m_inv_scale.y, q.z * m_inv_scale.z);
-  }
   float profile(float y) const {
     return y <= m_shape.base ? 1.f : std::exp(-(y - m_shape.base) / m_shape.scale_height);
   }
   DensityBounds bounds(const Vec3f& lo, const Vec3f& hi) const {
     float n_lo = 0.f, n_hi = 0.f;
-    if (!m_mask.full) fbm_range(m_noise, noise_point(lo), noise_point(hi), m_fractal, &n_lo, &n_hi);
+    if (!m_mask.full) m_field.range(lo, hi, &n_lo, &n_hi);
     // NOTE: margins for rounding: the noise's float evaluation may stray ~1e-6 past its interval
     // bound, and the profile's exp by an ulp; a majorant a hair too large costs nothing, one too
     // small would bias.
@@ -72,10 +57,8 @@ class GroundFog final : public TrackedMedium {
   }
 
   Shape m_shape;
-  NoiseBasis m_noise;
-  Fractal m_fractal;
+  NoiseField m_field;
   CoverageMask m_mask;
-  Vec3f m_inv_scale{1.f};
 };
 
 PluginInfo info() {
@@ -101,20 +84,7 @@ PluginInfo info() {
                                         "standard deviations of the noise")
                .above(0)
                .at_most(100))
-      .add(param::real("feature_size", 60.0, "horizontal size in metres of the fog banks (the noise's "
-                                             "coarsest lattice spacing)")
-               .above(0))
-      .add(param::real("feature_height", 12.0, "vertical size in metres of the banks' noise").above(0))
-      .add(param::integer("octaves", 5, "octaves of the fBm noise (detail down to feature_size / 2^(octaves-1))")
-               .in(1, 10))
-      .add(param::integer("seed", 0, "seed of the noise (another seed, other banks)").at_least(0))
-      .add(param::vec3("wind", Vec3f(0.f), "offset in metres of the noise field: the banks drift with it "
-                                           "(wind velocity x time)"))
-      .add(param::real("extent", 1000.0, "half-width in metres of the fogged square around the origin (x and z)")
-               .above(0))
-      .add(param::vec3("majorant_cells", Vec3f(64.f, 16.f, 64.f), "cells of the majorant grid along x, y, z "
-                                                                  "(whole numbers)")
-               .in(1, 512));
+      .add(noise_field_params("fog banks", 60.0, 12.0, 5, 1000.0));
 }
 
 std::shared_ptr<Medium> create(const Params& params, const PluginContext&) {
@@ -123,21 +93,14 @@ std::shared_ptr<Medium> create(const Params& params, const PluginContext&) {
   s.scale_height = params.get_float("scale_height");
   s.top = params.has("top") ? params.get_float("top") : s.base + 7.f * s.scale_height;
   s.extent = params.get_float("extent");
-  s.feature_size = params.get_float("feature_size");
-  s.feature_height = params.get_float("feature_height");
-  s.wind = params.get_vec3("wind");
   if (!(s.top > s.base))
     throw Error("medium 'ground_fog': top (" + std::to_string(s.top) + ") must be above base (" +
                 std::to_string(s.base) + ")");
-  const Vec3f cells = params.get_vec3("majorant_cells");
-  for (int a = 0; a < 3; ++a)
-    if (cells[a] != std::floor(cells[a]))
-      throw Error("medium 'ground_fog': majorant_cells must be whole numbers, got " + std::to_string(cells[a]));
-  FractalParams fp;
-  fp.octaves = int(params.get_int("octaves"));
+  int cells[3];
+  whole_numbers(params, "majorant_cells", "ground_fog", cells);
   return std::make_shared<GroundFog>(extinction_from(params), params.get_color("albedo"), params.get_float("g"), s,
-                                     fp, params.get_float("coverage"), params.get_float("contrast"),
-                                     uint64_t(params.get_int("seed")), cells);
+                                     NoiseField(params), params.get_float("coverage"), params.get_float("contrast"),
+                                     cells);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/error.h"
 #include "core/plugin.h"
 
 namespace sg {
@@ -293,6 +294,15 @@ bool TrackedMedium::sample_in_segment(const Vec3f& o, const Vec3f& d, float t_ma
 
 float extinction_from(const Params& params) {
   return params.has("visibility") ? k_koschmieder / params.get_float("visibility") : params.get_float("extinction");
+}
+
+void whole_numbers(const Params& params, const std::string& key, const std::string& medium, int out[3]) {
+  const Vec3f v = params.get_vec3(key);
+  for (int a = 0; a < 3; ++a) {
+    if (v[a] != std::floor(v[a]))
+      throw Error("medium '" + medium + "': " + key + " must be whole numbers, got " + std::to_string(v[a]));
+    out[a] = int(v[a]);
+  }
 }
 
 std::vector<ParamDecl> tracked_medium_params(const std::string& density_one, double albedo, double g) {

@@ -127,5 +127,8 @@ float extinction_from(const Params& params);
 /// The parameters every heterogeneous medium shares (visibility / extinction at density 1, albedo,
 /// g with these defaults) for PluginInfo::add.
 std::vector<ParamDecl> tracked_medium_params(const std::string& density_one, double albedo, double g);
+/// The vec3 parameter `key` as three whole numbers (cell or voxel counts); an error naming
+/// `medium` and the key otherwise.
+void whole_numbers(const Params& params, const std::string& key, const std::string& medium, int out[3]);
 
 }  // namespace sg

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "chi2.h"
+#include "dome_checks.h"
 #include "core/error.h"
 #include "core/params.h"
 #include "core/rng.h"
@@ -18,9 +19,6 @@ using namespace sgtest;
 
 namespace {
 
-Vec3f to_f(const DVec3& v) { return Vec3f(float(v.x), float(v.y), float(v.z)); }
-DVec3 to_d(const Vec3f& v) { return {v.x, v.y, v.z}; }
-double deg(double d) { return d * k_pi_d / 180.0; }
 constexpr double k_sun_half_angle_deg = 0.265;
 
 struct SkyParams {
@@ -39,10 +37,6 @@ std::shared_ptr<Light> make_sky(const SkyParams& s) {
   return create_light("sky", p, "light 0");
 }
 
-DVec3 direction(double elevation_deg, double azimuth_deg) {
-  double e = deg(elevation_deg), a = deg(azimuth_deg);
-  return {std::cos(e) * std::sin(a), std::sin(e), -std::cos(e) * std::cos(a)};
-}
 
 /// Preetham appendix A.2 zenith luminance (kcd/m^2).
 double preetham_zenith_luminance(double t, double elevation_deg) {
@@ -64,34 +58,6 @@ void preetham_zenith_xy(double t, double elevation_deg, double* x, double* y) {
 DVec3 rgb_to_xyz(const Color& c) {
   return {0.4124564 * c.x + 0.3575761 * c.y + 0.1804375 * c.z, 0.2126729 * c.x + 0.7151522 * c.y + 0.0721750 * c.z,
           0.0193339 * c.x + 0.1191920 * c.y + 0.9503041 * c.z};
-}
-
-/// Irradiance on a surface with normal n from light samples.
-Color mc_irradiance(const Light& l, const DVec3& n, int samples, uint64_t seed) {
-  Pcg32 rng(seed);
-  double e[3] = {0, 0, 0};
-  for (int i = 0; i < samples; ++i) {
-    LightSample ls;
-    if (!l.sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) continue;
-    double c = ddot(n, to_d(ls.wi));
-    if (c <= 0.0) continue;
-    for (int k = 0; k < 3; ++k) e[k] += double(ls.li[k]) * c / double(ls.pdf);
-  }
-  return Color(float(e[0] / samples), float(e[1] / samples), float(e[2] / samples));
-}
-
-/// Horizontal irradiance of a sky without sun by quadrature (midpoint in cos theta, phi).
-DVec3 quadrature_horizontal_irradiance(const Light& sky_without_sun) {
-  const int nz = 200, nphi = 400;
-  DVec3 e{0, 0, 0};
-  for (int i = 0; i < nz; ++i)
-    for (int j = 0; j < nphi; ++j) {
-      double z = (i + 0.5) / nz, phi = 2.0 * k_pi_d * (j + 0.5) / nphi, r = std::sqrt(1.0 - z * z);
-      Color l = sky_without_sun.le(to_f({r * std::cos(phi), z, r * std::sin(phi)}));
-      e.x += l.x * z, e.y += l.y * z, e.z += l.z * z;
-    }
-  double w = 2.0 * k_pi_d / (double(nz) * nphi);
-  return {e.x * w, e.y * w, e.z * w};
 }
 
 /// Sun irradiance on a surface facing it: disc radiance x solid angle of the disc.
@@ -207,10 +173,6 @@ TEST(sky, sample_direction_chi2) {
   s.sun = false;
   auto sky = make_sky(s);
   Grid2D g{64, 32, 0.0, 1.0, 0.0, 1.0};
-  auto dir_of = [](double u, double v) {
-    double th = k_pi_d * v, ph = 2.0 * k_pi_d * u;
-    return DVec3{std::sin(th) * std::sin(ph), std::cos(th), -std::sin(th) * std::cos(ph)};
-  };
   const int n = 1000000;
   Pcg32 rng(802);
   std::vector<double> obs(g.size(), 0.0);
@@ -221,24 +183,11 @@ TEST(sky, sample_direction_chi2) {
       ++failed;
       continue;
     }
-    double u = wrap_phi(std::atan2(double(ls.wi.x), -double(ls.wi.z))) / (2.0 * k_pi_d);
-    double v = std::acos(std::max(-1.0, std::min(1.0, double(ls.wi.y)))) / k_pi_d;
-    obs[size_t(g.cell(u, v))] += 1.0;
+    obs[equirect_cell(g, ls.wi)] += 1.0;
   }
   EXPECT_EQ(failed, 0);
   // Midpoint rule with two nodes per table pixel and axis, none on a pixel edge.
-  std::vector<double> exp(g.size());
-  for (int iy = 0; iy < g.ny; ++iy)
-    for (int ix = 0; ix < g.nx; ++ix) {
-      double acc = 0.0;
-      for (int a = 0; a < 8; ++a)
-        for (int b = 0; b < 8; ++b) {
-          double u = g.cx0(ix) + (g.cx1(ix) - g.cx0(ix)) * (a + 0.5) / 8;
-          double v = g.cy0(iy) + (g.cy1(iy) - g.cy0(iy)) * (b + 0.5) / 8;
-          acc += double(sky->pdf_le(to_f(dir_of(u, v)))) * 2.0 * k_pi_d * k_pi_d * std::sin(k_pi_d * v);
-        }
-      exp[size_t(iy) * g.nx + ix] = n * acc / 64.0 * (g.cx1(ix) - g.cx0(ix)) * (g.cy1(iy) - g.cy0(iy));
-    }
+  std::vector<double> exp = equirect_expected_counts(*sky, g, n);
   EXPECT_NEAR(sum(exp) / n, 1.0, 1e-3) << "pdf_le does not integrate to 1";
   Chi2Result r = chi2_test(obs, exp);
   EXPECT_TRUE(r.ok) << r.message;
@@ -308,7 +257,7 @@ TEST(sky, horizontal_irradiance_and_ground) {
     DVec3 e_sky = quadrature_horizontal_irradiance(*no_sun);
     DVec3 e_sun = sun_normal_irradiance(*sky, *no_sun, direction(el, 40.0));
     double sin_el = std::sin(deg(el));
-    Color e_mc = mc_irradiance(*sky, {0, 1, 0}, 400000, 804);
+    Color e_mc = to_f(mc_irradiance(*sky, {0, 1, 0}, 400000, 804));
     double expected[3] = {e_sky.x + e_sun.x * sin_el, e_sky.y + e_sun.y * sin_el, e_sky.z + e_sun.z * sin_el};
     for (int k = 0; k < 3; ++k)
       EXPECT_NEAR(e_mc[k] / expected[k], 1.0, 1e-2) << "elevation " << el << ", channel " << k;
@@ -369,14 +318,7 @@ TEST(sky, power_and_visibility) {
   sky->preprocess(b);
   // pi r^2 x 4 pi x mean luminance (by quadrature over the sphere; the sampling table is
   // a pixel-centre approximation of it).
-  const int nz = 200, nphi = 400;
-  double mean = 0.0;
-  for (int i = 0; i < nz; ++i)
-    for (int j = 0; j < nphi; ++j) {
-      double z = -1.0 + 2.0 * (i + 0.5) / nz, phi = 2.0 * k_pi_d * (j + 0.5) / nphi, r = std::sqrt(1.0 - z * z);
-      mean += luminance(sky->le(to_f({r * std::cos(phi), z, r * std::sin(phi)})));
-    }
-  mean /= double(nz) * nphi;
+  const double mean = sphere_mean_luminance(*sky);
   EXPECT_NEAR(sky->power() / (k_pi_d * 3.0 * 4.0 * k_pi_d * mean), 1.0, 1e-2);
   // The sun adds its irradiance x pi r^2.
   s.sun = true;

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "chi2.h"
+#include "dome_checks.h"
 #include "core/error.h"
 #include "core/params.h"
 #include "core/rng.h"
@@ -18,9 +19,6 @@ using namespace sgtest;
 
 namespace {
 
-Vec3f to_f(const DVec3& v) { return Vec3f(float(v.x), float(v.y), float(v.z)); }
-DVec3 to_d(const Vec3f& v) { return {v.x, v.y, v.z}; }
-double deg(double d) { return d * k_pi_d / 180.0; }
 
 struct TwilightParams {
   double elevation = -6.0, azimuth = 0.0, turbidity = 3.0;
@@ -49,10 +47,6 @@ std::shared_ptr<Light> make_day_sky_at_sunset(double azimuth, double turbidity, 
   return create_light("sky", p, "light 1");
 }
 
-DVec3 direction(double elevation_deg, double azimuth_deg) {
-  double e = deg(elevation_deg), a = deg(azimuth_deg);
-  return {std::cos(e) * std::sin(a), std::sin(e), -std::cos(e) * std::cos(a)};
-}
 
 /// USNO Circular 171's fit: illuminance (lx) on a horizontal plane at sun altitude h in
 /// [-18, 5] degrees.
@@ -70,36 +64,14 @@ double usno_lx(double h) {
   return std::pow(10.0, l0 + l1 * x + l2 * x * x + l3 * x * x * x);
 }
 
-/// Horizontal irradiance of le() above the horizon by quadrature (midpoint in cos theta and
-/// phi, 300 x 600 cells: not the plugin's own grid), as illuminance (x 683 lm/W at strength 1).
-DVec3 horizontal_lx(const Light& l, int nz = 300) {
-  const int nphi = 2 * nz;
-  DVec3 e{0, 0, 0};
-  for (int i = 0; i < nz; ++i)
-    for (int j = 0; j < nphi; ++j) {
-      double z = (i + 0.5) / nz, phi = 2.0 * k_pi_d * (j + 0.5) / nphi, r = std::sqrt(1.0 - z * z);
-      Color c = l.le(to_f({r * std::cos(phi), z, r * std::sin(phi)}));
-      e.x += c.x * z, e.y += c.y * z, e.z += c.z * z;
-    }
-  double w = 683.0 * 2.0 * k_pi_d / (double(nz) * nphi);
-  return {e.x * w, e.y * w, e.z * w};
-}
+/// Horizontal illuminance of le() above the horizon by quadrature (300 x 600 cells: not the
+/// plugin's own grid; x 683 lm/W at strength 1).
+DVec3 lx(const DVec3& e) { return {e.x * 683.0, e.y * 683.0, e.z * 683.0}; }
+DVec3 horizontal_lx(const Light& l, int nz = 300) { return lx(quadrature_horizontal_irradiance(l, nz)); }
 double lum(const DVec3& c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
 
 /// Irradiance on a surface with normal n by light sampling, as illuminance.
-DVec3 mc_lx(const Light& l, const DVec3& n, int samples, uint64_t seed) {
-  Pcg32 rng(seed);
-  DVec3 e{0, 0, 0};
-  for (int i = 0; i < samples; ++i) {
-    LightSample ls;
-    if (!l.sample({Vec3f(0.f), Vec3f(0.f)}, rng.next_2d(), &ls)) continue;
-    double c = ddot(n, to_d(ls.wi));
-    if (c <= 0.0) continue;
-    double w = c / double(ls.pdf) * 683.0 / samples;
-    e.x += ls.li.x * w, e.y += ls.li.y * w, e.z += ls.li.z * w;
-  }
-  return e;
-}
+DVec3 mc_lx(const Light& l, const DVec3& n, int samples, uint64_t seed) { return lx(mc_irradiance(l, n, samples, seed)); }
 
 }  // namespace
 
@@ -163,7 +135,9 @@ TEST(twilight, horizontal_illuminance_follows_the_measurements) {
   double prev = e_of(0.0, 1.7e-4, 60);
   for (double el = -0.1; el >= -20.0; el -= el > -3.0 ? 0.1 : 0.5) {
     double e = e_of(el, 1.7e-4, 60);
-    if (el > -18.0) EXPECT_LT(e, prev) << "elevation " << el;
+    if (el > -18.0) {
+      EXPECT_LT(e, prev) << "elevation " << el;
+    }
     EXPECT_GT(e, (el > -3.0 ? 0.6 : 0.5) * prev) << "jump at elevation " << el;
     prev = e;
   }
@@ -248,10 +222,6 @@ TEST(twilight, sample_direction_chi2) {
     s.sky_glow = el < -10.0 ? 0.003 : 0.0;
     auto tw = make_twilight(s);
     Grid2D g{64, 32, 0.0, 1.0, 0.0, 1.0};
-    auto dir_of = [](double u, double v) {
-      double th = k_pi_d * v, ph = 2.0 * k_pi_d * u;
-      return DVec3{std::sin(th) * std::sin(ph), std::cos(th), -std::sin(th) * std::cos(ph)};
-    };
     const int n = 1000000;
     Pcg32 rng(903);
     std::vector<double> obs(g.size(), 0.0);
@@ -263,24 +233,11 @@ TEST(twilight, sample_direction_chi2) {
         continue;
       }
       bad += ls.pdf != tw->pdf_le(ls.wi) || ls.li != tw->le(ls.wi);
-      double u = wrap_phi(std::atan2(double(ls.wi.x), -double(ls.wi.z))) / (2.0 * k_pi_d);
-      double v = std::acos(std::max(-1.0, std::min(1.0, double(ls.wi.y)))) / k_pi_d;
-      obs[size_t(g.cell(u, v))] += 1.0;
+      obs[equirect_cell(g, ls.wi)] += 1.0;
     }
     EXPECT_EQ(failed, 0);
     EXPECT_EQ(bad, 0);
-    std::vector<double> exp(g.size());
-    for (int iy = 0; iy < g.ny; ++iy)
-      for (int ix = 0; ix < g.nx; ++ix) {
-        double acc = 0.0;
-        for (int a = 0; a < 8; ++a)
-          for (int b = 0; b < 8; ++b) {
-            double u = g.cx0(ix) + (g.cx1(ix) - g.cx0(ix)) * (a + 0.5) / 8;
-            double v = g.cy0(iy) + (g.cy1(iy) - g.cy0(iy)) * (b + 0.5) / 8;
-            acc += double(tw->pdf_le(to_f(dir_of(u, v)))) * 2.0 * k_pi_d * k_pi_d * std::sin(k_pi_d * v);
-          }
-        exp[size_t(iy) * g.nx + ix] = n * acc / 64.0 * (g.cx1(ix) - g.cx0(ix)) * (g.cy1(iy) - g.cy0(iy));
-      }
+    std::vector<double> exp = equirect_expected_counts(*tw, g, n);
     EXPECT_NEAR(sum(exp) / n, 1.0, 1e-3) << "pdf_le does not integrate to 1";
     Chi2Result r = chi2_test(obs, exp);
     EXPECT_TRUE(r.ok) << "elevation " << el << ": " << r.message;
@@ -312,14 +269,7 @@ TEST(twilight, power_and_visibility) {
   b.expand(Vec3f(-1.f, -1.f, -1.f));
   b.expand(Vec3f(1.f, 1.f, 1.f));  // radius sqrt(3)
   tw->preprocess(b);
-  const int nz = 200, nphi = 400;
-  double mean = 0.0;
-  for (int i = 0; i < nz; ++i)
-    for (int j = 0; j < nphi; ++j) {
-      double z = -1.0 + 2.0 * (i + 0.5) / nz, phi = 2.0 * k_pi_d * (j + 0.5) / nphi, r = std::sqrt(1.0 - z * z);
-      mean += luminance(tw->le(to_f({r * std::cos(phi), z, r * std::sin(phi)})));
-    }
-  mean /= double(nz) * nphi;
+  const double mean = sphere_mean_luminance(*tw);
   EXPECT_NEAR(tw->power() / (k_pi_d * 3.0 * 4.0 * k_pi_d * mean), 1.0, 2e-2);
   ParamSet hidden;
   hidden.set("visible", false);

@@ -7,12 +7,8 @@ import numpy as np
 import pytest
 
 import synthgen as sg
-from synthgen import primitives as P
 
-
-def _add(s, geometry, world_from_object, **instance):
-    mesh = s.add_mesh(geometry["positions"], geometry["indices"], normals=geometry["normals"])
-    return s.add_instance(mesh, world_from_object, **instance)
+from medium_checks import furnace_mean, furnace_scene, light_sampling_on_and_off, mis_scene, street
 
 
 def _blob_grid(n=10, half=3.0, seed=4):
@@ -31,34 +27,20 @@ def test_non_absorbing_heterogeneous_medium_keeps_the_furnace(medium):
     """Inside a closed sphere whose wall emits 1 and reflects 0.5 the radiance is 2 everywhere; a
     non-absorbing heterogeneous medium (albedo 1) only scatters that uniform field: still 2, within
     1.5% of the image mean."""
-    s = sg.Scene()
-    wall = s.add_material("emissive", {"radiance": 1.0, "albedo": 0.5, "two_sided": True})
-    _add(s, P.uv_sphere(3.0), np.eye(4), material_id=wall)
-    pose = sg.PinholeCamera.look_at((0.0, 0.0, 0.0), (0.3, 0.2, 1.0), (0.0, 1.0, 0.0))
-    s.set_camera(sg.PinholeCamera.from_fov(60.0, 32, 24, pose))
+    s = furnace_scene()
     if medium == "grid":
         s.set_medium("grid", {**_blob_grid(), "visibility": 2.0, "albedo": 1.0, "g": 0.5})
     else:
         s.set_medium("ground_fog", {**SMALL_FOG, "albedo": 1.0, "g": 0.5})
-    r = s.render(spp=64, max_depth=200, rr_depth=200, max_medium_depth=4000, seed=5)
-    mean = float(np.asarray(r.rgb, np.float64).mean())
+    mean = furnace_mean(s)
     print(f"\nfurnace with a non-absorbing {medium} medium (expect 2): {mean:.4f}")
     assert abs(mean - 2.0) < 0.03, mean
 
 
 def _mis_scene():
-    s = sg.Scene()
-    _add(s, P.ground(), np.eye(4), material_id=s.add_material("diffuse", {"albedo": 0.5}))
-    _add(s, P.box((1.0, 1.0, 1.0)), P.translate([1.0, 0.5, 5.0]), class_id=1,
-         material_id=s.add_material("coated", {"albedo": [0.6, 0.2, 0.1], "roughness": 0.3}))
-    _add(s, P.uv_sphere(0.5), P.translate([-1.0, 2.0, 6.0]), material_id=s.add_material("emissive", {"radiance": 8.0}))
-    s.add_light("sun", {"direction": [0.3, 0.7, 0.5], "irradiance": 3.0, "angular_diameter": 10.0})
-    s.add_light("environment", {"radiance": 0.3})
-    s.set_medium("ground_fog", {"visibility": 8.0, "scale_height": 1.5, "feature_size": 3.0, "feature_height": 1.5,
-                                "extent": 30.0, "coverage": 0.6, "g": 0.5, "majorant_cells": [32, 8, 32]})
-    pose = sg.PinholeCamera.look_at((0.0, 1.5, 0.0), (0.0, 1.0, 5.0), (0.0, 1.0, 0.0))
-    s.set_camera(sg.PinholeCamera.from_fov(50.0, 48, 36, pose))
-    return s
+    return mis_scene("ground_fog", {"visibility": 8.0, "scale_height": 1.5, "feature_size": 3.0,
+                                    "feature_height": 1.5, "extent": 30.0, "coverage": 0.6, "g": 0.5,
+                                    "majorant_cells": [32, 8, 32]}, 48, 36)
 
 
 def test_light_sampling_on_and_off_agree_in_ground_fog():
@@ -66,17 +48,7 @@ def test_light_sampling_on_and_off_agree_in_ground_fog():
     and a 10-degree sun under a uniform sky, rendered with next-event estimation (decoupled points by
     conditioned delta tracking, shadow rays by ratio tracking) and MIS (64 spp), and with BSDF and
     phase sampling alone (1024 spp): image means agree within 4 standard errors per channel."""
-    s = _mis_scene()
-    stats = {}
-    for nee, spp, seed in ((True, 64, 7), (False, 1024, 8)):
-        r = s.render(spp=spp, max_depth=6, seed=seed, next_event=nee)
-        x = np.asarray(r.rgb, np.float64)
-        d = np.asarray(r.rgb_even, np.float64) - np.asarray(r.rgb_odd, np.float64)
-        n = x.shape[0] * x.shape[1]
-        se = np.sqrt((d ** 2 / 4.0).sum(axis=(0, 1))) / n
-        stats[nee] = (x.mean(axis=(0, 1)), se, se ** 2 * spp)
-    (m1, s1, v1), (m0, s0, v0) = stats[True], stats[False]
-    z = np.abs(m1 - m0) / np.sqrt(s1 ** 2 + s0 ** 2)
+    (m1, s1, v1), (m0, s0, v0), z = light_sampling_on_and_off(_mis_scene())
     print(f"\nground fog, light sampling on: mean {m1.round(5)} +- {s1.round(5)}; off: {m0.round(5)} +- "
           f"{s0.round(5)}; z {z.round(2)}; per-sample variance off / on {float((v0 / v1).mean()):.1f}")
     assert (z < 4.0).all(), z
@@ -84,15 +56,7 @@ def test_light_sampling_on_and_off_agree_in_ground_fog():
 
 
 def _street():
-    s = sg.Scene()
-    _add(s, P.ground(), np.eye(4), material_id=s.add_material("diffuse", {"albedo": 0.3}))
-    _add(s, P.box((1.8, 1.5, 4.2)), P.translate([0.0, 0.75, 12.0]), class_id=1, instance_id=7,
-         material_id=s.add_material("diffuse", {"albedo": [0.6, 0.1, 0.1]}))
-    s.add_light("sun", {"direction": [0.3, 0.8, -0.5], "irradiance": 3.0})
-    s.add_light("environment", {"radiance": 0.4})
-    pose = sg.PinholeCamera.look_at((0.0, 1.5, 0.0), (0.0, 1.0, 12.0), (0.0, 1.0, 0.0))
-    s.set_camera(sg.PinholeCamera.from_fov(45.0, 48, 36, pose))
-    return s
+    return street(48, 36)
 
 
 MEDIA = {

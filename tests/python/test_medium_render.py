@@ -9,10 +9,7 @@ import synthgen as sg
 from synthgen import primitives as P
 
 
-def _add(s, geometry, world_from_object, **instance):
-    """An instance of a primitive's mesh (synthgen.primitives) in scene ``s``."""
-    mesh = s.add_mesh(geometry["positions"], geometry["indices"], normals=geometry["normals"])
-    return s.add_instance(mesh, world_from_object, **instance)
+from medium_checks import add as _add, furnace_mean, furnace_scene, light_sampling_on_and_off, mis_scene, street
 
 
 def _absorbing_scene(extinction):
@@ -66,32 +63,19 @@ def test_non_absorbing_medium_keeps_the_furnace():
     radiance is 1 / (1 - 0.5) = 2 everywhere; a non-absorbing medium (albedo 1, forward
     scattering g 0.5, a mean free path of a third of the radius) scatters that uniform field
     into itself: still 2. Image mean within 1.5% without and with the medium."""
-    s = sg.Scene()
-    wall = s.add_material("emissive", {"radiance": 1.0, "albedo": 0.5, "two_sided": True})
-    _add(s, P.uv_sphere(3.0), np.eye(4), material_id=wall)
-    pose = sg.PinholeCamera.look_at((0.0, 0.0, 0.0), (0.3, 0.2, 1.0), (0.0, 1.0, 0.0))
-    s.set_camera(sg.PinholeCamera.from_fov(60.0, 32, 24, pose))
+    s = furnace_scene()
     means = {}
     for label in ("clear", "medium"):
         if label == "medium":
             s.set_medium("homogeneous", {"extinction": 1.0, "albedo": 1.0, "g": 0.5})
-        r = s.render(spp=64, max_depth=200, rr_depth=200, max_medium_depth=4000, seed=5)
-        means[label] = float(np.asarray(r.rgb, np.float64).mean())
+        means[label] = furnace_mean(s)
     print(f"\nfurnace (expect 2): clear {means['clear']:.4f}, with a non-absorbing medium {means['medium']:.4f}")
     assert abs(means["clear"] - 2.0) < 0.03, means
     assert abs(means["medium"] - 2.0) < 0.03, means
 
 
 def _foggy_street():
-    s = sg.Scene()
-    _add(s, P.ground(), np.eye(4), material_id=s.add_material("diffuse", {"albedo": 0.3}))
-    _add(s, P.box((1.8, 1.5, 4.2)), P.translate([0.0, 0.75, 12.0]), class_id=1, instance_id=7,
-         material_id=s.add_material("diffuse", {"albedo": [0.6, 0.1, 0.1]}))
-    s.add_light("sun", {"direction": [0.3, 0.8, -0.5], "irradiance": 3.0})
-    s.add_light("environment", {"radiance": 0.4})
-    pose = sg.PinholeCamera.look_at((0.0, 1.5, 0.0), (0.0, 1.0, 12.0), (0.0, 1.0, 0.0))
-    s.set_camera(sg.PinholeCamera.from_fov(45.0, 64, 48, pose))
-    return s
+    return street(64, 48)
 
 
 def test_fog_is_deterministic_replays_and_leaves_labels_alone(tmp_path):
@@ -208,26 +192,8 @@ def test_light_sampling_on_and_off_agree_in_fog():
     1024 spp): the image means agree within 4 standard errors (from each render's half-sample
     images) in every channel, and light sampling is worth its name (its per-sample variance is
     below a quarter of the other's; measured about 1/95)."""
-    s = sg.Scene()
-    _add(s, P.ground(), np.eye(4), material_id=s.add_material("diffuse", {"albedo": 0.5}))
-    _add(s, P.box((1.0, 1.0, 1.0)), P.translate([1.0, 0.5, 5.0]), class_id=1,
-         material_id=s.add_material("coated", {"albedo": [0.6, 0.2, 0.1], "roughness": 0.3}))
-    _add(s, P.uv_sphere(0.5), P.translate([-1.0, 2.0, 6.0]), material_id=s.add_material("emissive", {"radiance": 8.0}))
-    s.add_light("sun", {"direction": [0.3, 0.7, 0.5], "irradiance": 3.0, "angular_diameter": 10.0})
-    s.add_light("environment", {"radiance": 0.3})
-    s.set_medium("homogeneous", {"visibility": 30.0, "top": 8.0, "g": 0.5})
-    pose = sg.PinholeCamera.look_at((0.0, 1.5, 0.0), (0.0, 1.0, 5.0), (0.0, 1.0, 0.0))
-    s.set_camera(sg.PinholeCamera.from_fov(50.0, 64, 48, pose))
-    stats = {}
-    for nee, spp, seed in ((True, 64, 7), (False, 1024, 8)):
-        r = s.render(spp=spp, max_depth=6, seed=seed, next_event=nee)
-        x = np.asarray(r.rgb, np.float64)
-        d = np.asarray(r.rgb_even, np.float64) - np.asarray(r.rgb_odd, np.float64)
-        n = x.shape[0] * x.shape[1]
-        se = np.sqrt((d ** 2 / 4.0).sum(axis=(0, 1))) / n
-        stats[nee] = (x.mean(axis=(0, 1)), se, se ** 2 * spp)
-    (m1, s1, v1), (m0, s0, v0) = stats[True], stats[False]
-    z = np.abs(m1 - m0) / np.sqrt(s1 ** 2 + s0 ** 2)
+    s = mis_scene("homogeneous", {"visibility": 30.0, "top": 8.0, "g": 0.5}, 64, 48)
+    (m1, s1, v1), (m0, s0, v0), z = light_sampling_on_and_off(s)
     print(f"\nfog, light sampling on: mean {m1.round(5)} +- {s1.round(5)}; off: {m0.round(5)} +- {s0.round(5)}; "
           f"z {z.round(2)}; per-sample variance off / on {float((v0 / v1).mean()):.1f}")
     assert (z < 4.0).all(), z

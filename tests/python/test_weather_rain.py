@@ -11,11 +11,10 @@ import numpy as np
 import pytest
 
 from synthgen import post
-from synthgen import run as runner
 from synthgen.post.rain import drop_density, rain_extinction, rain_streaks
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-TINY = os.path.join(HERE, "scenarios", "tiny.yaml")
+from test_weather_scenario import file_bytes, run_tiny
+
 W, H, F = 240, 160, 200.0
 
 
@@ -89,42 +88,24 @@ def test_the_veil_is_koschmieder_with_the_rains_extinction():
 
 # -- in scenarios -------------------------------------------------------------------------
 
-def _run(tmp_path, name, text, count=4):
-    p = tmp_path / f"{name}.yaml"
-    p.write_text(text)
-    out = str(tmp_path / name)
-    s = runner.run(str(p), out, count=count, progress=False)
-    assert not s["failures"], s.text()
-    return out
-
-
-def _tiny(extra):
-    return open(TINY).read().replace("render: {spp: 4, max_depth: 4}", extra + "\nrender: {spp: 4, max_depth: 4}")
-
-
-def _bytes(path):
-    with open(path, "rb") as f:
-        return f.read()
-
-
 def test_rain_changes_images_not_labels_and_is_reproducible(tmp_path):
     """Rain in half the frames: labels byte-identical to the clear run, images too where it does
     not rain; a second run gives the same images; meta records the parameters and the drops."""
-    clear = _run(tmp_path, "clear", _tiny(""))
+    clear = run_tiny(tmp_path, "clear", "", count=4)
     weather = "weather: {rain: {probability: 0.5, rate: {uniform: [5, 30]}, wind: {uniform: [-3, 3]}}}"
-    rain = _run(tmp_path, "rain", _tiny(weather))
-    again = _run(tmp_path, "again", _tiny(weather))
+    rain = run_tiny(tmp_path, "rain", weather, count=4)
+    again = run_tiny(tmp_path, "again", weather, count=4)
     kinds = set()
     for k in range(4):
         name = f"{k:06d}"
         for sub in ("instance/{}.png", "semantic/{}.png", "depth/{}.exr"):
-            assert _bytes(os.path.join(clear, sub.format(name))) == _bytes(os.path.join(rain, sub.format(name)))
+            assert file_bytes(os.path.join(clear, sub.format(name))) == file_bytes(os.path.join(rain, sub.format(name)))
         img = os.path.join("images", f"{name}.png")
-        assert _bytes(os.path.join(rain, img)) == _bytes(os.path.join(again, img)), "rain is deterministic"
+        assert file_bytes(os.path.join(rain, img)) == file_bytes(os.path.join(again, img)), "rain is deterministic"
         meta = json.load(open(os.path.join(rain, "meta", f"{name}.json")))
         raining = meta["weather"] is not None
         kinds.add(raining)
-        assert (_bytes(os.path.join(clear, img)) == _bytes(os.path.join(rain, img))) == (not raining)
+        assert (file_bytes(os.path.join(clear, img)) == file_bytes(os.path.join(rain, img))) == (not raining)
         if raining:
             r = meta["weather"]["rain"]
             assert 5 <= r["rate"] <= 30 and -3 <= r["wind"] <= 3 and r["drops"] > 0 and r["extinction"] > 0
@@ -132,13 +113,13 @@ def test_rain_changes_images_not_labels_and_is_reproducible(tmp_path):
 
 
 def test_rain_as_a_post_step(tmp_path):
-    clear = _run(tmp_path, "clear", _tiny(""), count=2)
-    out = _run(tmp_path, "post", _tiny("post: [{type: rain, rate: 40, seed: {int: [0, 1000]}}]"), count=2)
+    clear = run_tiny(tmp_path, "clear", "", count=2)
+    out = run_tiny(tmp_path, "post", "post: [{type: rain, rate: 40, seed: {int: [0, 1000]}}]", count=2)
     for k in range(2):
         name = f"{k:06d}"
-        assert _bytes(os.path.join(clear, "instance", f"{name}.png")) == _bytes(os.path.join(out, "instance",
+        assert file_bytes(os.path.join(clear, "instance", f"{name}.png")) == file_bytes(os.path.join(out, "instance",
                                                                                             f"{name}.png"))
-        assert _bytes(os.path.join(clear, "images", f"{name}.png")) != _bytes(os.path.join(out, "images",
+        assert file_bytes(os.path.join(clear, "images", f"{name}.png")) != file_bytes(os.path.join(out, "images",
                                                                                           f"{name}.png"))
         meta = json.load(open(os.path.join(out, "meta", f"{name}.json")))
         assert meta["post"][0]["type"] == "rain" and meta["post"][0]["params"]["rate"] == 40

@@ -23,11 +23,22 @@ def _scenario(tmp_path, name, weather):
     return str(p)
 
 
-def _run(tmp_path, name, weather, count=3):
+def run_tiny(tmp_path, name, weather, count=3):
+    """The dataset of tests/python/scenarios/tiny.yaml with ``weather`` (any YAML lines: a
+    weather or post section) added, ``count`` frames, in tmp_path / name (shared by the weather
+    tests)."""
     out = str(tmp_path / name)
     s = runner.run(_scenario(tmp_path, name, weather), out, count=count, progress=False)
     assert not s["failures"], s.text()
     return out
+
+
+_run = run_tiny
+
+
+def file_bytes(path):
+    with open(path, "rb") as f:
+        return f.read()
 
 
 def _read(path, kind=oiio.FLOAT):

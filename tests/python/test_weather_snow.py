@@ -11,13 +11,12 @@ import pytest
 
 import synthgen as sg
 from synthgen import primitives as P
-from synthgen import run as runner
 from synthgen.scene import wear
 
-from test_weather_wet import COLORS, model_scenario, render_model, write_model
+from test_randomize_wear import COLORS, write_model
+from test_weather_scenario import file_bytes, run_tiny
+from test_weather_wet import model_scenario, render_model
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-TINY = os.path.join(HERE, "scenarios", "tiny.yaml")
 RED = (0.6, 0.05, 0.05)
 SNOW = np.array(wear.SNOW_COLOR, np.float32)
 
@@ -119,32 +118,17 @@ def test_snow_on_a_model_keeps_its_materials_where_it_does_not_lie(tmp_path):
     assert w["amount"] == 1.0 and w["ground"] == 1.0 and w["max_slope"] == 45.0 and isinstance(w["seed"], int)
 
 
-def _run(tmp_path, name, weather, count=4):
-    text = open(TINY).read().replace("render: {spp: 4, max_depth: 4}", weather + "\nrender: {spp: 4, max_depth: 4}")
-    p = tmp_path / f"{name}.yaml"
-    p.write_text(text)
-    out = str(tmp_path / name)
-    s = runner.run(str(p), out, count=count, progress=False)
-    assert not s["failures"], s.text()
-    return out
-
-
-def _bytes(path):
-    with open(path, "rb") as f:
-        return f.read()
-
-
 def test_snow_changes_the_image_not_the_labels(tmp_path):
-    clear = _run(tmp_path, "clear", "")
-    snowy = _run(tmp_path, "snowy", "weather: {snow: {probability: 0.5, amount: {uniform: [0.5, 1]}}}")
+    clear = run_tiny(tmp_path, "clear", "", count=4)
+    snowy = run_tiny(tmp_path, "snowy", "weather: {snow: {probability: 0.5, amount: {uniform: [0.5, 1]}}}", count=4)
     kinds = set()
     for k in range(4):
         meta = json.load(open(os.path.join(snowy, "meta", f"{k:06d}.json")))
         for sub in ("instance/{}.png", "semantic/{}.png", "depth/{}.exr"):
             f = sub.format(f"{k:06d}")
-            assert _bytes(os.path.join(clear, f)) == _bytes(os.path.join(snowy, f)), f
-        same = _bytes(os.path.join(clear, "images", f"{k:06d}.png")) == \
-            _bytes(os.path.join(snowy, "images", f"{k:06d}.png"))
+            assert file_bytes(os.path.join(clear, f)) == file_bytes(os.path.join(snowy, f)), f
+        same = file_bytes(os.path.join(clear, "images", f"{k:06d}.png")) == \
+            file_bytes(os.path.join(snowy, "images", f"{k:06d}.png"))
         kinds.add(meta["weather"] is not None)
         assert same == (meta["weather"] is None), k
         if meta["weather"]:

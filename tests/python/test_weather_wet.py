@@ -13,11 +13,11 @@ import pytest
 
 import synthgen as sg
 from synthgen import primitives as P
-from synthgen import run as runner
 from synthgen.scene import wear
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-TINY = os.path.join(HERE, "scenarios", "tiny.yaml")
+from test_randomize_wear import COLORS, write_model
+from test_weather_scenario import file_bytes, run_tiny
+
 N_WATER = 1.33
 
 
@@ -182,39 +182,21 @@ def test_wet_twins_keep_textures_and_leave_metals():
 
 # -- in scenarios -------------------------------------------------------------------------
 
-def _scenario(tmp_path, name, weather):
-    text = open(TINY).read().replace("render: {spp: 4, max_depth: 4}", weather + "\nrender: {spp: 4, max_depth: 4}")
-    p = tmp_path / f"{name}.yaml"
-    p.write_text(text)
-    return str(p)
-
-
-def _run(tmp_path, name, weather, count=4):
-    out = str(tmp_path / name)
-    s = runner.run(_scenario(tmp_path, name, weather), out, count=count, progress=False)
-    assert not s["failures"], s.text()
-    return out
-
-
-def _bytes(path):
-    with open(path, "rb") as f:
-        return f.read()
-
-
 def test_wet_changes_the_image_not_the_labels(tmp_path):
     """Half the frames wet: meta records the drawn parameters (and the pattern's seed); every
     label file is the dry run's, byte for byte; the wet frames' images differ, the others are
     the dry run's; the dataset verifies."""
-    dry = _run(tmp_path, "dry", "")
-    wet = _run(tmp_path, "wet", "weather: {wet: {probability: 0.5, wetness: {uniform: [0.5, 1]}, puddles: 0.2}}")
+    dry = run_tiny(tmp_path, "dry", "", count=4)
+    wet = run_tiny(tmp_path, "wet", "weather: {wet: {probability: 0.5, wetness: {uniform: [0.5, 1]}, puddles: 0.2}}",
+                   count=4)
     kinds = []
     for k in range(4):
         meta = json.load(open(os.path.join(wet, "meta", f"{k:06d}.json")))
         for sub in ("instance", "semantic"):
-            assert _bytes(os.path.join(dry, sub, f"{k:06d}.png")) == _bytes(os.path.join(wet, sub, f"{k:06d}.png"))
-        assert _bytes(os.path.join(dry, "depth", f"{k:06d}.exr")) == _bytes(os.path.join(wet, "depth", f"{k:06d}.exr"))
+            assert file_bytes(os.path.join(dry, sub, f"{k:06d}.png")) == file_bytes(os.path.join(wet, sub, f"{k:06d}.png"))
+        assert file_bytes(os.path.join(dry, "depth", f"{k:06d}.exr")) == file_bytes(os.path.join(wet, "depth", f"{k:06d}.exr"))
         img = os.path.join("images", f"{k:06d}.png")
-        same = _bytes(os.path.join(dry, img)) == _bytes(os.path.join(wet, img))
+        same = file_bytes(os.path.join(dry, img)) == file_bytes(os.path.join(wet, img))
         if meta["weather"] is None:
             assert same, k
             kinds.append("dry")
@@ -228,24 +210,6 @@ def test_wet_changes_the_image_not_the_labels(tmp_path):
     from synthgen.outputs.verify import verify_dataset
 
     verify_dataset(wet)
-
-
-COLORS = {"red": (0.8, 0.1, 0.1), "green": (0.1, 0.7, 0.1), "blue": (0.1, 0.1, 0.75)}
-
-
-def write_model(d):
-    """A unit box whose faces use three materials (two faces each), as OBJ + MTL."""
-    with open(os.path.join(d, "box.mtl"), "w") as f:
-        for name, (r, g, b) in COLORS.items():
-            f.write(f"newmtl {name}\nKd {r} {g} {b}\nKs 0 0 0\nNs 10\n\n")
-    v = [(x, y, z) for x in (-0.5, 0.5) for y in (0.0, 1.0) for z in (-0.5, 0.5)]
-    faces = {"red": [(1, 2, 4, 3), (5, 7, 8, 6)], "green": [(1, 5, 6, 2), (3, 4, 8, 7)],
-             "blue": [(1, 3, 7, 5), (2, 6, 8, 4)]}
-    with open(os.path.join(d, "box.obj"), "w") as f:
-        f.write("mtllib box.mtl\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in v))
-        for name, quads in faces.items():
-            f.write(f"usemtl {name}\n" + "".join(f"f {a} {b} {c} {e}\n" for a, b, c, e in quads))
-    return os.path.join(d, "box.obj")
 
 
 def model_scenario(mesh, weather=""):

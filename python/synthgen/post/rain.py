@@ -40,6 +40,7 @@ import numpy as np
 
 from ..schema.fields import Integer, Number, Record
 from . import Arrays, PostStep, register
+from .photo.fog import koschmieder
 
 __all__ = ["rain_streaks", "drop_density", "rain_extinction", "SCHEMA", "ray_lengths"]
 
@@ -176,8 +177,8 @@ def rain_streaks(rgb: np.ndarray, depth: np.ndarray, rng: np.random.Generator, *
     beta = rain_extinction(rate) * float(veil)
     if beta > 0:
         dist = np.minimum(np.where(np.isfinite(z_surf), z_surf, np.inf) * ray_lengths((h, w), fx, fy, cx, cy), 1000.0)
-        t_veil = np.exp(-beta * np.maximum(dist - float(far), 0.0)).astype(np.float32)[..., None]
-        out = out * t_veil + env.astype(np.float32)[None, None, :] * (1.0 - t_veil)
+        t_veil = np.exp(-beta * np.maximum(dist - float(far), 0.0)).astype(np.float32)
+        out = koschmieder(out, t_veil, env)
     if img.shape[2] > 3:
         out = np.concatenate([out, img[..., 3:]], axis=2)
     info = {"drops": n_drops, "drop_radiance": [round(float(x), 6) for x in e_drop],

@@ -48,6 +48,13 @@ SCHEMA = Record({
                      "entry declares; what was lit and where each lamp is in the image go into the metadata")
 
 
+def sky_units(colour: Any, luminance: float, strength: float) -> List[float]:
+    """Linear sRGB radiance of a light of ``colour`` at ``luminance`` (cd/m^2; or cd, or lx, for
+    intensities and illuminances) in the sky light's units, times ``strength``."""
+    c = np.asarray(colour, np.float64)
+    return [float(v) for v in c / float(c @ _Y) * float(luminance) / 683.0 * float(strength)]
+
+
 def lit_lamps(lamps: Mapping[str, Mapping[str, Any]], value: Mapping[str, Any]) -> Dict[str, str]:
     """{lamp name: luminance key} of the lamps ``value`` lights (a lamp not in it is unlit)."""
     kinds = {v["kind"] for v in lamps.values()}
@@ -90,10 +97,9 @@ class Lamps(Randomizer):
             kind = ctx.lamps[name]["kind"]
             if (kind, key) not in emitters:
                 info = LAMP_KINDS[kind]
-                colour = np.asarray(info["light"], np.float64)
-                radiance = colour / float(colour @ _Y) * LUMINANCE[key] / 683.0 * float(value["strength"])
+                radiance = sky_units(info["light"], LUMINANCE[key], value["strength"])
                 emitters[(kind, key)] = ctx.scene.add_material("emissive", {
-                    "radiance": [float(c) for c in radiance], "albedo": list(info["lens"])})
+                    "radiance": radiance, "albedo": list(info["lens"])})
             swap[ctx.lamp_material[name]] = emitters[(kind, key)]
         out = [swap.get(m, m) for m in materials]
         return out, {"head": value["head"], "tail": bool(value["tail"]), "brake": bool(value["brake"]),

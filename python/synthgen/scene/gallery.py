@@ -204,7 +204,7 @@ WEATHER_TILES: List[Tuple[str, Dict[str, Any]]] = [
 ]
 
 
-def render_weather_row(scenario: str, frame: int = 0, tile_w: int = 480, tile_h: int = 360, spp: int = 64,
+def render_weather_row(scenario: str, frame: int = 0, tile_w: int = 320, tile_h: int = 240, spp: int = 64,
                        tiles: Any = None, denoise: bool = True) -> np.ndarray:
     """The weather row (linear RGB): frame ``frame`` of ``scenario`` (its layout, camera and
     objects) with its weather section replaced by each of :data:`WEATHER_TILES` in turn

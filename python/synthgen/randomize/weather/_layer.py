@@ -1,9 +1,11 @@
-"""Shared by the medium conditions whose medium is the ``homogeneous`` plugin (a layer of
-constant density, cpp/medium/homogeneous.cpp): fog and haze; over photo backgrounds the same
-layer in image space (Koschmieder's law from the photo's depth map)."""
+"""Shared by the medium conditions: :class:`Layer`, whose medium is the ``homogeneous`` plugin (a
+layer of constant density, cpp/medium/homogeneous.cpp) -- fog and haze; over photo backgrounds
+the same layer in image space (Koschmieder's law from the photo's depth map) -- and
+:class:`NoiseMedium`, a heterogeneous noise medium whose noise each frame draws anew -- ground fog
+and clouds."""
 from __future__ import annotations
 
-from typing import Any, Dict, Mapping, Optional
+from typing import Any, Dict, Mapping, Optional, Tuple
 
 import numpy as np
 
@@ -83,3 +85,25 @@ class Layer(Condition):
         out = dict(arrays)
         out["rgb"] = fog.koschmieder(arrays["rgb"], t, a)
         return out
+
+
+class NoiseMedium(Condition):
+    """A noise medium plugin (``plugin``: ground_fog, clouds) with the drawn values of ``keys``
+    and a noise seed of the frame's own (recorded in meta). Not over photos (``what``: the
+    medium's name in the error)."""
+
+    group = "medium"
+    plugin: str = ""
+    keys: Tuple[str, ...] = ()
+    what: str = ""
+
+    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
+        refuse_photos(spec, fail, self.what)
+
+    def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
+        return {k: float(value[k]) for k in self.keys}
+
+    def apply(self, ctx: WeatherContext, params: Mapping[str, Any]) -> Optional[Dict[str, Any]]:
+        seed = int(ctx.rng.integers(0, 2 ** 31 - 1))
+        ctx.renderer.scene.set_medium(self.plugin, {**dict(params), "seed": seed})
+        return {"seed": seed}

@@ -25,6 +25,7 @@ import numpy as np
 
 from ...schema.fields import EMPTY, Bool, Choice, Number, Record
 from ...schema.random import R
+from ..lamps import sky_units
 from . import Condition, WeatherContext
 
 #: NOTE: Rec. 709 luminance weights of linear sRGB; radiance = colour / Y(colour) x L / 683,
@@ -88,12 +89,6 @@ def moon_illuminance(elevation: float, phase: float) -> float:
     z = math.radians(90.0 - float(elevation))
     airmass = 1.0 / math.sqrt(1.0 - 0.96 * math.sin(z) ** 2)
     return fc * 10.7639 * 10.0 ** (-0.4 * 0.172 * airmass)
-
-
-def _radiance(colour: Sequence[float], luminance: float, strength: float) -> List[float]:
-    """A colour at a luminance (cd/m^2, or cd, or lx) in the sky's units."""
-    c = np.asarray(colour, np.float64)
-    return [float(v) for v in c / float(c @ _Y) * float(luminance) / LM_PER_W * float(strength)]
 
 
 def time_of_day_schema(elevation: Mapping[str, Any], sky_glow: Any, key: float, moon: bool) -> Record:
@@ -241,7 +236,7 @@ class TimeOfDay(Condition):
         if e <= 0.0:
             return None
         lights.append(("sun", {"elevation": float(moon["elevation"]), "azimuth": float(moon["azimuth"]),
-                               "irradiance": _radiance(cct_rgb(MOON_CCT), e, strength), "angular_diameter": 0.52}))
+                               "irradiance": sky_units(cct_rgb(MOON_CCT), e, strength), "angular_diameter": 0.52}))
         return {"elevation": float(moon["elevation"]), "azimuth": float(moon["azimuth"]),
                 "phase": float(moon["phase"]), "illuminance_lx": round(e, 6)}
 
@@ -270,7 +265,7 @@ def _headlamps(r: Any, lamps: Mapping[str, Any], lights: List[Tuple[str, Dict[st
         up = world[:3, :3] @ np.asarray(AXES[o.spec.up or o.shape.up or "+y"], np.float64)
         fwd, up = fwd / np.linalg.norm(fwd), up / np.linalg.norm(up)
         cd = float(lamps["intensity"]) * (3.0 if info["head"] == "high" else 1.0)
-        intensity = _radiance(LAMP_KINDS["head"]["light"], cd, float(info.get("strength", 1.0)))
+        intensity = sky_units(LAMP_KINDS["head"]["light"], cd, float(info.get("strength", 1.0)))
         for name in info.get("lit", ()):
             lamp = o.shape.lamps.get(name)
             if lamp is None or lamp["kind"] != "head":
@@ -324,10 +319,10 @@ def _street_lights(ctx: WeatherContext, street: Mapping[str, Any], strength: flo
     u, n, _ = road_frame(street)
     h = float(street["height"])
     arm = min(2.0, 0.35 * float(street["offset"]))
-    intensity = _radiance(colour, float(street["intensity"]), strength)
+    intensity = sky_units(colour, float(street["intensity"]), strength)
     # The lens: a Lambertian emitter facing down whose intensity straight down is LENS_SHARE of
     # the spot's (L = share x I / area).
-    lens_l = _radiance(colour, LENS_SHARE * float(street["intensity"]) / (LENS_SIZE[0] * LENS_SIZE[1]), strength)
+    lens_l = sky_units(colour, LENS_SHARE * float(street["intensity"]) / (LENS_SIZE[0] * LENS_SIZE[1]), strength)
     kit = _StreetKit.of(r)
     obstacles = [(np.asarray(o.world, np.float64)[[0, 2], 3], float(o.radius)) for o in r.objects
                  if o.world is not None and r.scene.instance_visible(o.instance)]

@@ -9,15 +9,14 @@ from typing import Any, Dict, Mapping, Optional
 
 from ...schema.fields import Number, Record
 from ...schema.random import R
-from . import Condition, WeatherContext, register
-from ._layer import refuse_photos
-
-KEYS = ("visibility", "bottom", "top", "coverage", "feature_size", "albedo", "g")
+from . import WeatherContext, register
+from ._layer import NoiseMedium
 
 
-class Clouds(Condition):
+class Clouds(NoiseMedium):
     key = "clouds"
-    group = "medium"
+    plugin = "clouds"
+    what = "clouds"
     order = 7
     doc = "low clouds: a deck of clouds over the scene, broken by clear gaps (a heterogeneous medium)"
     schema = Record({
@@ -32,20 +31,14 @@ class Clouds(Condition):
         "g": R(Number(0.8, min=-0.99, max=0.99, doc="Henyey-Greenstein asymmetry (> 0: forward scattering)")),
     })
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
-        refuse_photos(spec, fail, "clouds")
-
-    def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
-        return {k: float(value[k]) for k in KEYS}
+    keys = tuple(schema.fields)
 
     def apply(self, ctx: WeatherContext, params: Mapping[str, Any]) -> Optional[Dict[str, Any]]:
         if not params["bottom"] < params["top"]:
             from ..._core import SynthgenError
 
             raise SynthgenError(f"weather.clouds: bottom ({params['bottom']}) must be below top ({params['top']})")
-        seed = int(ctx.rng.integers(0, 2 ** 31 - 1))
-        ctx.renderer.scene.set_medium("clouds", {**dict(params), "seed": seed})
-        return {"seed": seed}
+        return super().apply(ctx, params)
 
 
 register(Clouds())

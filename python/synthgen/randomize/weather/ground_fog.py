@@ -4,20 +4,16 @@ times a coverage mask of 3D fBm noise, tracked through a majorant grid). Each fr
 own banks (the noise seed from the condition's generator; recorded in meta)."""
 from __future__ import annotations
 
-from typing import Any, Dict, Mapping, Optional
-
 from ...schema.fields import Number, Record
 from ...schema.random import R
-from . import Condition, WeatherContext, register
-from ._layer import refuse_photos
-
-#: The medium plugin's parameters this condition draws (the rest keep the plugin's defaults).
-KEYS = ("visibility", "scale_height", "coverage", "contrast", "feature_size", "feature_height", "albedo", "g")
+from . import register
+from ._layer import NoiseMedium
 
 
-class GroundFog(Condition):
+class GroundFog(NoiseMedium):
     key = "ground_fog"
-    group = "medium"
+    plugin = "ground_fog"
+    what = "ground fog"
     order = 5
     doc = "ground fog: banks of fog on the ground, thinning with height, patchy (a heterogeneous medium)"
     schema = Record({
@@ -33,16 +29,8 @@ class GroundFog(Condition):
         "g": R(Number(0.75, min=-0.99, max=0.99, doc="Henyey-Greenstein asymmetry (> 0: forward scattering)")),
     })
 
-    def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
-        refuse_photos(spec, fail, "ground fog")
-
-    def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
-        return {k: float(value[k]) for k in KEYS}
-
-    def apply(self, ctx: WeatherContext, params: Mapping[str, Any]) -> Optional[Dict[str, Any]]:
-        seed = int(ctx.rng.integers(0, 2 ** 31 - 1))
-        ctx.renderer.scene.set_medium("ground_fog", {**dict(params), "seed": seed})
-        return {"seed": seed}
+    #: The medium plugin's parameters this condition draws (the rest keep the plugin's defaults).
+    keys = tuple(schema.fields)
 
 
 register(GroundFog())
