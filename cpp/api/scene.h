@@ -23,6 +23,7 @@
 #include "io/image_io.h"
 #include "integrator/path_tracer.h"
 #include "integrator/render_scene.h"
+#include "integrator/texture_estimate.h"
 #include "light/light.h"
 #include "medium/medium.h"
 #include "material/material.h"
@@ -30,6 +31,25 @@
 #include "texture/texture.h"
 
 namespace sg {
+
+/// What the texture resolution estimate (integrator/texture_estimate.h) found for one image
+/// texture of the scene; Scene::estimate_texture_resolution. Textures sharing a pyramid (one
+/// file under several uv transforms) share `pyramid` and its figures.
+struct TextureResolution {
+  uint32_t texture_id = 0;
+  std::string source;  ///< the file (a "memory:" key for in-memory pixels)
+  int pyramid = 0;     ///< index of the distinct pyramid among the results
+  int width = 0, height = 0, channels = 0, levels = 0;
+  bool alpha = false;
+  bool seen = false;        ///< the pyramid was looked up by the estimate
+  uint64_t lookups = 0;     ///< lookups of the pyramid
+  int needed_level = 0;     ///< the pyramid's coarsest level keeping >= 1 texel per pixel (0 unseen)
+  int needed_width = 0, needed_height = 0;
+  int texture_level = 0;    ///< the same for this texture's own lookups (its uv transform)
+  float min_rho = 0.f;      ///< smallest footprint of a lookup in level-0 texels (inf unseen)
+  uint64_t bytes_full = 0;  ///< the pyramid's texel memory, every level
+  uint64_t bytes_needed = 0;  ///< levels needed_level and coarser
+};
 
 /// What a file import produced.
 struct ImportResult {
@@ -157,6 +177,11 @@ class Scene {
   /// Renders with the current camera (committing pending edits first). Thread-safe
   /// with respect to the GIL: touches no Python objects.
   void render(const RenderSettings& settings, Film* film);
+
+  /// The texture resolution estimate for the current camera (integrator/texture_estimate.h),
+  /// committing pending edits first: one entry per image texture, by texture id.
+  std::vector<TextureResolution> estimate_texture_resolution(const TextureEstimateSettings& settings,
+                                                             TextureEstimate* raw = nullptr);
 
   // Persistence ----------------------------------------------------------------------
   void save(const std::string& path) const;

@@ -546,6 +546,52 @@ a BVH build). render() commits pending edits first.)doc")
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
            "centre ray's coverage).")
+      .def("estimate_texture_resolution",
+           [](Scene& s, uint32_t max_depth, uint32_t max_rays_per_pixel, uint32_t threads) {
+             TextureEstimateSettings es;
+             es.max_depth = max_depth;
+             es.max_rays_per_pixel = std::max<uint32_t>(max_rays_per_pixel, 1);
+             es.threads = threads;
+             std::vector<TextureResolution> res;
+             TextureEstimate raw;
+             {
+               py::gil_scoped_release release;
+               res = s.estimate_texture_resolution(es, &raw);
+             }
+             py::list rows;
+             for (const TextureResolution& r : res) {
+               py::dict d;
+               d["texture_id"] = r.texture_id;
+               d["source"] = r.source;
+               d["pyramid"] = r.pyramid;
+               d["width"] = r.width;
+               d["height"] = r.height;
+               d["channels"] = r.channels;
+               d["levels"] = r.levels;
+               d["alpha"] = r.alpha;
+               d["seen"] = r.seen;
+               d["lookups"] = r.lookups;
+               d["needed_level"] = r.needed_level;
+               d["needed_width"] = r.needed_width;
+               d["needed_height"] = r.needed_height;
+               d["texture_level"] = r.texture_level;
+               d["min_rho"] = r.min_rho;
+               d["bytes_full"] = r.bytes_full;
+               d["bytes_needed"] = r.bytes_needed;
+               rows.append(d);
+             }
+             py::dict out;
+             out["textures"] = rows;
+             out["camera_rays"] = raw.camera_rays;
+             out["bounce_rays"] = raw.bounce_rays;
+             return out;
+           },
+           py::arg("max_depth") = 4, py::arg("max_rays_per_pixel") = 16, py::arg("threads") = 0,
+           "The texture resolution estimate for the current camera (docs/texture_lod.md): one camera ray\n"
+           "per pixel with ray differentials, followed through sharp reflections and refractions up to\n"
+           "max_depth bounces; per image texture the coarsest mip level that keeps at least one texel per\n"
+           "pixel in at least one axis, and the memory of its pyramid before and after. Returns\n"
+           "{'textures': [one dict per image texture], 'camera_rays', 'bounce_rays'}; commits first.")
       .def("save", &Scene::save, py::arg("path"), "Writes the scene (XML + '.bin' sidecar) for replay.")
       .def_static("load", &Scene::load, py::arg("path"), "Replays a scene written by save().");
 }

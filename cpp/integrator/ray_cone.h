@@ -55,6 +55,24 @@ inline ConeTriangle cone_triangle(const InstanceRecord& inst, uint32_t prim) {
   return t;
 }
 
+/// Maps world-space vectors in a triangle's plane to uv through its affine
+/// parameterization v = alpha e1 + beta e2 -> alpha duv1 + beta duv2 (exact for any, also
+/// stretched, uv mapping). `valid` is false for a degenerate triangle.
+/// NOTE: pbrt-v4 sec. 6.5.3 solves the same 2 x 2 system for dp/du, dp/dv; here its normal
+/// equations (the Gram matrix of e1, e2) by Cramer's rule.
+struct TriangleUvMap {
+  explicit TriangleUvMap(const ConeTriangle& t)
+      : tri(t), g11(dot(t.e1, t.e1)), g12(dot(t.e1, t.e2)), g22(dot(t.e2, t.e2)), det(g11 * g22 - g12 * g12) {}
+  bool valid() const { return det > 0.f; }
+  Vec2f operator()(const Vec3f& v) const {
+    float r1 = dot(tri.e1, v), r2 = dot(tri.e2, v);
+    float alpha = (g22 * r1 - g12 * r2) / det, beta = (g11 * r2 - g12 * r1) / det;
+    return tri.u1 * alpha + tri.u2 * beta;
+  }
+  const ConeTriangle& tri;
+  float g11, g12, g22, det;
+};
+
 /// sqrt(uv area / world area) of the triangle (uv area 1/2 without uvs). Returns 0 for a
 /// degenerate uv mapping (the lookup is then a point sample).
 inline float uv_per_world_length(const ConeTriangle& t) {
@@ -82,27 +100,17 @@ inline float ray_cone_uv_footprint(float cone_width, const Vec3f& ng, const Vec3
 /// uv mapping, exactly grazing ray).
 /// NOTE: the cone of width w cut by a plane at incidence theta is an ellipse with axes w
 /// and w / cos(theta) (the anisotropic counterpart of eq. (34)'s 1/|n.d| term); world
-/// tangent vectors are mapped to uv through the triangle's affine parameterization
-/// v = alpha e1 + beta e2 -> alpha duv1 + beta duv2 (pbrt-v4 sec. 6.5.3 solves the same
-/// 2x2 system for dp/du, dp/dv), which is exact for any (also stretched) uv mapping.
+/// tangent vectors are mapped to uv by TriangleUvMap.
 inline bool ray_cone_uv_ellipse(const ConeTriangle& tri, const Vec3f& ng, const Vec3f& d, float cone_width,
                                 Vec2f* axis_a, Vec2f* axis_b) {
   float cos_theta = std::fabs(dot(ng, d));
   if (!(cone_width > 0.f) || !(cos_theta > 1e-6f)) return false;
-  const Vec3f &e1 = tri.e1, &e2 = tri.e2;
-  const Vec2f &u1 = tri.u1, &u2 = tri.u2;
-  float g11 = dot(e1, e1), g12 = dot(e1, e2), g22 = dot(e2, e2);
-  float det = g11 * g22 - g12 * g12;
-  if (!(det > 0.f)) return false;
+  const TriangleUvMap to_uv(tri);
+  if (!to_uv.valid()) return false;
   Vec3f dp = d - ng * dot(d, ng);  // projection of the ray direction on the plane
   float lp = length(dp);
-  Vec3f ta = lp > 1e-6f ? dp / lp : e1 / std::sqrt(g11);  // head-on: any tangent
+  Vec3f ta = lp > 1e-6f ? dp / lp : tri.e1 / std::sqrt(to_uv.g11);  // head-on: any tangent
   Vec3f tb = cross(ng, ta);
-  auto to_uv = [&](const Vec3f& v) {
-    float r1 = dot(e1, v), r2 = dot(e2, v);
-    float alpha = (g22 * r1 - g12 * r2) / det, beta = (g11 * r2 - g12 * r1) / det;
-    return u1 * alpha + u2 * beta;
-  };
   *axis_a = to_uv(ta * (cone_width / cos_theta));
   *axis_b = to_uv(tb * cone_width);
   return std::isfinite(axis_a->x) && std::isfinite(axis_a->y) && std::isfinite(axis_b->x) &&

@@ -337,6 +337,15 @@ class CoatedMaterial final : public Material {
     }
   }
 
+ public:
+  int specular_events(const SurfaceInteraction&, SpecularEvent out[4]) const override {
+    if (m_invisible || !(m_specular > 0.f) || std::max(m_ggx.ax, m_ggx.ay) > roughness_to_alpha(k_sharp_roughness))
+      return 0;
+    out[0] = SpecularEvent{};
+    return 1;
+  }
+
+ private:
   std::shared_ptr<Texture> m_albedo;
   float m_eta;
   GGX m_ggx;

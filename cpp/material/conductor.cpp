@@ -88,6 +88,12 @@ class ConductorMaterial final : public Material {
     return Color(0.f);
   }
 
+  int specular_events(const SurfaceInteraction&, SpecularEvent out[4]) const override {
+    if (std::max(m_ggx.ax, m_ggx.ay) > roughness_to_alpha(k_sharp_roughness)) return 0;
+    out[0] = SpecularEvent{};
+    return 1;
+  }
+
   bool sample(const SurfaceInteraction& si, const Vec3f& wo, float, const Vec2f& u, BsdfSample* out) const override {
     Frame f;
     float side;

@@ -274,6 +274,15 @@ class DielectricMaterial final : public Material {
     return (1.f - fresnel_dielectric_pair(co, -ci, l.eta)) * m_ggx.pdf_visible(l.wo, l.h) * dh_dwi;
   }
 
+ public:
+  int specular_events(const SurfaceInteraction&, SpecularEvent out[4]) const override {
+    if (std::max(m_ggx.ax, m_ggx.ay) > roughness_to_alpha(k_sharp_roughness)) return 0;
+    out[0] = SpecularEvent{};
+    out[1] = SpecularEvent{true, m_thin ? 1.f : m_eta};
+    return 2;
+  }
+
+ private:
   float m_eta;  ///< ior / exterior_ior
   GGX m_ggx;
   bool m_smooth, m_thin;

@@ -183,6 +183,19 @@ struct BsdfSample {
   float eta = 1.f;  ///< relative index of refraction of a transmission event (1 otherwise)
 };
 
+/// A sharp lobe the texture resolution estimate follows (integrator/texture_estimate.h):
+/// mirror reflection about the shading normal, or refraction with relative index `eta`
+/// (interior over exterior, for a ray arriving from the side the shading normal points to;
+/// 1 for a thin slab, which the ray passes straight through).
+struct SpecularEvent {
+  bool refract = false;
+  float eta = 1.f;
+};
+
+/// Lobes at most this rough (GGX roughness, alpha = roughness^2) count as sharp for the
+/// texture resolution estimate: textures seen in them are seen about as sharply as directly.
+constexpr float k_sharp_roughness = 0.2f;
+
 /// The MaterialNeeds bits of a texture: k_needs_footprint when it is filtered over the uv
 /// footprint (not for constants or 3D-mapped procedural textures).
 inline uint32_t texture_needs(const Texture& t) {
@@ -244,6 +257,11 @@ class Material {
   virtual Color albedo(const SurfaceInteraction& si) const = 0;
   /// Union of BsdfFlags of all lobes; materials without non-delta lobes skip light sampling.
   virtual uint32_t flags() const = 0;
+
+  /// The sharp lobes at `si` (delta lobes, and glossy ones no rougher than
+  /// k_sharp_roughness) that the texture resolution estimate follows, at most 4, written to
+  /// `out`; returns their number. Default: none (diffuse and rough materials).
+  virtual int specular_events(const SurfaceInteraction& si, SpecularEvent out[4]) const { return 0; }
 
   /// Emitted radiance towards `wo` (zero for non-emitters).
   virtual Color emission(const SurfaceInteraction& si, const Vec3f& wo) const { return Color(0.f); }

@@ -174,6 +174,21 @@ class MixMaterial final : public Material {
     return bits_to_unit_float(uint32_t(h >> 32)) < w ? m_b.get() : m_a.get();
   }
 
+ public:
+  /// Both components' sharp lobes (each once).
+  int specular_events(const SurfaceInteraction& si, SpecularEvent out[4]) const override {
+    SpecularEvent a[4], b[4];
+    int na = m_a->specular_events(si, a), nb = m_b->specular_events(si, b), n = 0;
+    for (int i = 0; i < na + nb; ++i) {
+      const SpecularEvent& e = i < na ? a[i] : b[i - na];
+      bool seen = false;
+      for (int j = 0; j < n; ++j) seen = seen || (out[j].refract == e.refract && out[j].eta == e.eta);
+      if (!seen && n < 4) out[n++] = e;
+    }
+    return n;
+  }
+
+ private:
   std::shared_ptr<Material> m_a, m_b;
   float m_weight;
   std::shared_ptr<Texture> m_mask;

@@ -453,6 +453,18 @@ class PrincipledMaterial final : public Material {
     *pdf = s.p_glass * (1.f - fr) * s.ggx.pdf_visible(lo, h) * std::fabs(ih) / (denom * denom);
   }
 
+ public:
+  int specular_events(const SurfaceInteraction& si, SpecularEvent out[4]) const override {
+    float rough = m_p.roughness.eval(si);
+    if (m_p.metallic_roughness) rough *= eval_texture(*m_p.metallic_roughness, si).y;
+    bool sharp = clamp01(rough) <= k_sharp_roughness;
+    int n = 0;
+    if (sharp || (m_p.clearcoat > 0.f && m_p.clearcoat_roughness <= k_sharp_roughness)) out[n++] = SpecularEvent{};
+    if (sharp && m_p.transmission > 0.f) out[n++] = SpecularEvent{true, m_p.ior};
+    return n;
+  }
+
+ private:
   PrincipledParams m_p;
   const SchlickAlbedoTables& m_tables;
   float m_cc_alpha;

@@ -211,4 +211,11 @@ Color MipMap::lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, W
   return sum * (1.f / float(n));
 }
 
+uint64_t MipMap::bytes(int first_level) const {
+  uint64_t n = 0;
+  for (int l = std::max(first_level, 0); l < levels(); ++l)
+    n += uint64_t(m_levels[size_t(l)].width) * uint64_t(m_levels[size_t(l)].height) * uint64_t(m_channels) * sizeof(float);
+  return n + (m_alpha ? m_alpha->bytes(first_level) : 0);
+}
+
 }  // namespace sg

@@ -16,6 +16,7 @@
 // io/image_io.h), so all filtering happens in linear space.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -61,6 +62,10 @@ class MipMap {
   /// as the minor axis (see mipmap.cpp).
   Color lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, WrapMode wrap) const;
   static constexpr int k_max_probes = 8;
+
+  /// Bytes of the texels of levels `first_level` and coarser (the alpha pyramid's included):
+  /// the memory a texture holds when it keeps only those levels.
+  uint64_t bytes(int first_level = 0) const;
 
   /// Pyramid of the alpha channel (one channel), null when the image has none.
   const MipMap* alpha() const { return m_alpha.get(); }

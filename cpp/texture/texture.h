@@ -15,6 +15,8 @@
 
 namespace sg {
 
+class MipMap;
+
 /// Everything a texture may be evaluated from: the surface parameterization and footprint
 /// (all textures) and, for procedural textures with 3D mappings (object, world,
 /// relative-local), the hit point in world and object space, the object's bounds and the
@@ -78,6 +80,8 @@ class Texture {
   virtual bool has_alpha_channel() const { return false; }
   /// Alpha channel at `uv`, filtered like eval(); 1 without an alpha channel.
   virtual float eval_alpha(const Vec2f& uv, float footprint = 0.f) const { return 1.f; }
+  /// The pyramid an image texture reads (texture/mipmap.h); null for other textures.
+  virtual const MipMap* mipmap() const { return nullptr; }
 
  protected:
   /// For textures that know at construction that they are constant.

@@ -10,6 +10,7 @@ what the worker rendered before never changes the result.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 import time
 from typing import Any, Dict, List, Mapping, Optional, Set, Tuple
@@ -29,7 +30,7 @@ from .layout import FrameView, amodal_pixels, search_layout
 from .records import PlacedObject, frame_camera, level_frame, object_records
 from .resources import FrameLibrary, Pool, Shape, Shapes, realize
 
-__all__ = ["FrameRenderer", "light_plugin"]
+__all__ = ["FrameRenderer", "FrameSetup", "light_plugin"]
 
 
 def light_plugin(light: PluginSpec) -> Tuple[str, Dict[str, Any]]:
@@ -71,6 +72,25 @@ def tilted(local: np.ndarray, dims: np.ndarray, roll: float, pitch: float) -> Tu
     m = lift @ r @ shift @ local
     radius = float(np.hypot(turned[:, 0], turned[:, 2]).max())
     return m, radius
+
+
+@dataclasses.dataclass
+class FrameSetup:
+    """A frame's scene as FrameRenderer.prepare left it (committed, not rendered)."""
+    frame: int
+    spec: FrameSpec
+    fp: Any                     #: the photo frame (photo backgrounds) or None
+    photo_info: Any
+    camera: Any
+    objects: List[PlacedObject]
+    layout: Any
+    keep: List[bool]
+    amodal: Dict[int, Any]
+    render_seed: int
+    weather_ctx: Dict[str, Any]
+    t0: float
+    t_update: float
+    t_layout: float
 
 
 class FrameRenderer:
@@ -178,8 +198,10 @@ class FrameRenderer:
             for i in shown:
                 self.scene.set_instance_visible(i, True)
 
-    def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
-        """(arrays, meta, timings) of one frame."""
+    def prepare(self, frame: int) -> "FrameSetup":
+        """Sets the scene up for one frame -- lights, ground, objects, their layout, the camera,
+        the weather -- and commits it, without rendering (render() goes on from here; tools
+        such as ``synthgen texres`` look at the frame's scene)."""
         t0 = time.perf_counter()
         sc = self.sc
         spec = sample_frame(sc, frame)
@@ -228,7 +250,6 @@ class FrameRenderer:
                 self.scene.set_instance_labels(o.instance, 0, 0)
         amodal = {k: amodal_pixels(view, camera, k) for k in range(len(objects)) if keep[k] and objects[k].spec.labelled}
         view.show(keep)
-        rs = sc.spec["render"]
         render_seed = int(np.random.SeedSequence([sc.seed, int(frame), 3]).generate_state(1, np.uint64)[0])
         if fp is not None and sc.spec["background"]["dome"]:
             photo_info = dict(photo_info or {})
@@ -236,6 +257,18 @@ class FrameRenderer:
         self.scene.set_camera(camera)
         weather_ctx = self._apply_weather(spec, fp, camera, render_seed)
         self.scene.commit()
+        return FrameSetup(frame=frame, spec=spec, fp=fp, photo_info=photo_info, camera=camera, objects=objects,
+                          layout=layout, keep=keep, amodal=amodal, render_seed=render_seed, weather_ctx=weather_ctx,
+                          t0=t0, t_update=t_update, t_layout=t_layout)
+
+    def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
+        """(arrays, meta, timings) of one frame."""
+        f = self.prepare(frame)
+        sc = self.sc
+        rs = sc.spec["render"]
+        spec, fp, photo_info, camera, objects = f.spec, f.fp, f.photo_info, f.camera, f.objects
+        layout, keep, amodal, render_seed, weather_ctx = f.layout, f.keep, f.amodal, f.render_seed, f.weather_ctx
+        t_update, t_layout = f.t_update, f.t_layout
         from ..post.quality import exposure_scale
 
         if rs["denoise"] and fp is not None:  # check_inputs reports it at the YAML key first
@@ -330,7 +363,7 @@ class FrameRenderer:
             meta["real_objects"] = real_object_records(fp, arrays["instance_id"], sc.class_names)
         if spec.post:
             meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]
-        timings = {"update_s": t_update - t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
+        timings = {"update_s": t_update - f.t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
         if fp is not None:  # compositing, camera matching and labels of a photo frame
             timings["photo_s"] = time.perf_counter() - t_render
         return arrays, meta, timings
