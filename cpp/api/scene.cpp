@@ -491,6 +491,12 @@ void Scene::render(const RenderSettings& settings, Film* film) {
     throw Error("render: a medium (" + m_medium->type + ") with shadow catchers is not supported: a photo "
                 "background has no fog of its own to match (fog on photos is applied from the photo's depth)");
   m_render_scene.camera = m_camera;
+  // Labels read no colour texels: label-only renders leave the textures as they are.
+  RenderStats lod_stats;
+  if (!settings.labels_only) {
+    if (settings.texture_lod) apply_texture_lod(settings, &lod_stats);
+    else use_every_texture_level();
+  }
   uint64_t alpha_calls_before = m_accel->alpha_test_calls();
   render_path_traced(m_render_scene, settings, film);
   if (settings.denoise && !settings.labels_only) denoise_film(film);
@@ -498,6 +504,8 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   film->stats.mesh_bvh_builds = m_stats.mesh_bvh_builds;
   film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last_commit;
   film->stats.top_level_builds = m_stats.top_level_builds;
+  film->stats.texture_lod_time_s = lod_stats.texture_lod_time_s;
+  texture_memory(&film->stats.texture_bytes_full, &film->stats.texture_bytes_resident);
 }
 
 }  // namespace sg

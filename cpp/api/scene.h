@@ -49,6 +49,10 @@ struct TextureResolution {
   float min_rho = 0.f;      ///< smallest footprint of a lookup in level-0 texels (inf unseen)
   uint64_t bytes_full = 0;  ///< the pyramid's texel memory, every level
   uint64_t bytes_needed = 0;  ///< levels needed_level and coarser
+  int first_resident = 0;     ///< the pyramid's finest level in memory now
+  int first_used = 0;         ///< the pyramid's finest level lookups read now
+  int tail_level = 0;         ///< the finest level that always stays resident
+  uint64_t bytes_resident = 0;  ///< the pyramid's texel memory now
 };
 
 /// What a file import produced.
@@ -183,6 +187,16 @@ class Scene {
   std::vector<TextureResolution> estimate_texture_resolution(const TextureEstimateSettings& settings,
                                                              TextureEstimate* raw = nullptr);
 
+  /// Makes mip levels `level` and coarser of each listed texture's pyramid resident (its
+  /// pyramid shared with other listed textures: the finest level any asks for), freeing finer
+  /// levels where they can be read back (docs/texture_lod.md); levels are clamped to
+  /// [0, tail]. Textures not listed keep their levels. Throws sg::Error for an unknown id or
+  /// a texture that is not an image.
+  void set_texture_levels(const std::vector<std::pair<uint32_t, int>>& texture_levels);
+  /// Tiled mip-mapped copies of image files in `dir` (ImageCache::set_mip_cache_dir); files
+  /// loaded afterwards are read lazily. Empty: off.
+  void set_mip_cache_dir(const std::string& dir) { m_images.set_mip_cache_dir(dir); }
+
   // Persistence ----------------------------------------------------------------------
   void save(const std::string& path) const;
   static std::unique_ptr<Scene> load(const std::string& path);
@@ -237,6 +251,19 @@ class Scene {
   /// Sets a material's ambient-occlusion needs from the textures and materials it refers to.
   void assign_ao(MaterialEntry& e) const;
   void build_render_scene();
+  /// Every level of every pyramid used (read back where dropped): a render without
+  /// RenderSettings::texture_lod sees full-resolution textures whatever an earlier one kept.
+  void use_every_texture_level();
+  /// RenderSettings::texture_lod: the estimate for the camera, its levels made resident, the
+  /// memory budget kept by dropping unseen pyramids least recently used first; fills the
+  /// texture fields of `stats`.
+  void apply_texture_lod(const RenderSettings& settings, RenderStats* stats);
+  /// Texel memory of the distinct pyramids of the scene's image textures: every level, and
+  /// the resident ones.
+  void texture_memory(uint64_t* full, uint64_t* resident) const;
+  /// Per pyramid, the number of the last apply_texture_lod that saw it (least recently used).
+  std::map<const MipMap*, uint64_t> m_pyramid_last_seen;
+  uint64_t m_texture_lod_count = 0;
   /// Per mesh slot: 1 when some instance uses it with a material that has alpha (cut-outs).
   std::vector<char> meshes_needing_alpha_test() const;
 

@@ -1,7 +1,9 @@
 // Scene::estimate_texture_resolution: the texture resolution estimate of the scene's camera,
 // per image texture (docs/texture_lod.md).
 #include <algorithm>
+#include <chrono>
 #include <map>
+#include <set>
 
 #include "api/scene.h"
 #include "core/error.h"
@@ -46,10 +48,85 @@ std::vector<TextureResolution> Scene::estimate_texture_resolution(const TextureE
     r.needed_height = mip->height(r.needed_level);
     r.bytes_full = mip->bytes(0);
     r.bytes_needed = mip->bytes(r.needed_level);
+    r.first_resident = mip->first_resident();
+    r.first_used = mip->first_used();
+    r.tail_level = mip->tail_level();
+    r.bytes_resident = mip->bytes(mip->first_resident());
     out.push_back(std::move(r));
   }
   if (raw) *raw = std::move(est);
   return out;
+}
+
+void Scene::set_texture_levels(const std::vector<std::pair<uint32_t, int>>& texture_levels) {
+  std::map<const MipMap*, int> level;
+  for (const auto& [id, l] : texture_levels) {
+    if (id >= m_textures.size() || !m_textures[id] || !m_textures[id]->object)
+      throw Error("texture " + std::to_string(id) + " does not exist");
+    const MipMap* mip = m_textures[id]->object->mipmap();
+    if (!mip) throw Error("texture " + std::to_string(id) + ": not an image texture (it has no mip levels)");
+    auto it = level.emplace(mip, l).first;
+    it->second = std::min(it->second, l);
+  }
+  for (const auto& [mip, l] : level) mip->make_resident(l);
+}
+
+void Scene::use_every_texture_level() {
+  for (const auto& e : m_textures)
+    if (e && e->object)
+      if (const MipMap* mip = e->object->mipmap()) mip->use_levels(0);
+}
+
+void Scene::texture_memory(uint64_t* full, uint64_t* resident) const {
+  std::set<const MipMap*> seen;
+  *full = *resident = 0;
+  for (const auto& e : m_textures)
+    if (e && e->object)
+      if (const MipMap* mip = e->object->mipmap(); mip && seen.insert(mip).second) {
+        *full += mip->bytes(0);
+        *resident += mip->bytes(mip->first_resident());
+      }
+}
+
+void Scene::apply_texture_lod(const RenderSettings& settings, RenderStats* stats) {
+  auto t0 = std::chrono::steady_clock::now();
+  TextureEstimateSettings es;
+  es.threads = settings.threads;
+  std::vector<TextureResolution> res = estimate_texture_resolution(es);
+  const uint64_t now = ++m_texture_lod_count;
+  // Lookups read the estimate's level (the margin finer) of a seen pyramid and the tail of an
+  // unseen one, whatever is in memory: the image depends on this frame alone, never on what
+  // a worker rendered before (determinism across worker counts).
+  std::map<const MipMap*, int> level;
+  for (const TextureResolution& r : res) {
+    const MipMap* mip = m_textures[r.texture_id]->object->mipmap();
+    auto it = level.emplace(mip, r.tail_level).first;
+    if (r.seen) it->second = std::min(it->second, std::max(0, r.needed_level - int(settings.texture_lod_margin)));
+    if (r.seen) m_pyramid_last_seen[mip] = now;
+  }
+  for (const auto& [mip, l] : level) mip->use_levels(l);
+  // Forget pyramids no texture holds any more (their addresses may be reused).
+  for (auto it = m_pyramid_last_seen.begin(); it != m_pyramid_last_seen.end();)
+    it = level.count(it->first) ? std::next(it) : m_pyramid_last_seen.erase(it);
+  // Levels finer than those used stay in memory (the next frames may need them) while the
+  // texture memory fits the budget; beyond it they are freed, least recently seen pyramid
+  // first (never seen: first of all; ties in address order, which changes no image).
+  std::vector<std::pair<uint64_t, const MipMap*>> order;
+  for (const auto& [mip, l] : level) {
+    auto it = m_pyramid_last_seen.find(mip);
+    order.emplace_back(it == m_pyramid_last_seen.end() ? 0 : it->second, mip);
+  }
+  std::sort(order.begin(), order.end());
+  uint64_t full = 0, resident = 0;
+  texture_memory(&full, &resident);
+  const double budget = double(settings.texture_budget_mib) * 1024.0 * 1024.0;
+  for (const auto& [last, mip] : order) {
+    if (double(resident) <= budget) break;
+    uint64_t before = mip->bytes(mip->first_resident());
+    mip->drop_unused();
+    resident -= before - mip->bytes(mip->first_resident());
+  }
+  stats->texture_lod_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace sg

@@ -497,13 +497,16 @@ a BVH build). render() commits pending edits first.)doc")
         d["alpha_tested_meshes"] = s.commit_stats().alpha_tested_meshes;  // cut-out meshes
         d["image_loads"] = s.image_cache().loads();            // image files decoded
         d["image_cache_hits"] = s.image_cache().hits();        // image textures that shared one
+        d["mip_files_written"] = s.image_cache().mip_files_written();  // tiled copies made
+        d["mip_files_opened"] = s.image_cache().mip_files_opened();    // files read lazily
         return d;
       })
       .def("render",
            [](Scene& s, uint32_t spp, uint32_t max_depth, uint32_t rr_depth, uint64_t seed, uint32_t threads,
               uint32_t tile_size, bool texture_filtering, float exposure, float clamp_indirect, float noise_threshold,
               float target_psnr, uint32_t min_spp, uint32_t max_spp, bool denoise, uint32_t max_medium_depth,
-              bool next_event, bool labels_only) {
+              bool next_event, bool labels_only, bool texture_lod, uint32_t texture_lod_margin,
+              float texture_budget_mib) {
              RenderSettings rs;
              rs.spp = spp;
              rs.max_depth = max_depth;
@@ -522,6 +525,9 @@ a BVH build). render() commits pending edits first.)doc")
              rs.max_medium_depth = max_medium_depth;
              rs.next_event = next_event;
              rs.labels_only = labels_only;
+             rs.texture_lod = texture_lod;
+             rs.texture_lod_margin = texture_lod_margin;
+             rs.texture_budget_mib = texture_budget_mib;
              auto film = std::make_shared<Film>();
              {
                py::gil_scoped_release release;
@@ -543,6 +549,9 @@ a BVH build). render() commits pending edits first.)doc")
            py::arg("denoise") = render_default<bool>("denoise"),
            py::arg("max_medium_depth") = render_default<uint32_t>("max_medium_depth"),
            py::arg("next_event") = render_default<bool>("next_event"), py::arg("labels_only") = false,
+           py::arg("texture_lod") = render_default<bool>("texture_lod"),
+           py::arg("texture_lod_margin") = render_default<uint32_t>("texture_lod_margin"),
+           py::arg("texture_budget_mib") = render_default<float>("texture_budget_mib"),
            "Path-traces the scene; releases the GIL. Returns a RenderResult. With labels_only, only the\n"
            "label outputs are computed (one pixel-centre ray per pixel; rgb stays 0, alpha is the\n"
            "centre ray's coverage).")
@@ -578,6 +587,10 @@ a BVH build). render() commits pending edits first.)doc")
                d["min_rho"] = r.min_rho;
                d["bytes_full"] = r.bytes_full;
                d["bytes_needed"] = r.bytes_needed;
+               d["first_resident"] = r.first_resident;
+               d["first_used"] = r.first_used;
+               d["tail_level"] = r.tail_level;
+               d["bytes_resident"] = r.bytes_resident;
                rows.append(d);
              }
              py::dict out;
@@ -592,6 +605,20 @@ a BVH build). render() commits pending edits first.)doc")
            "max_depth bounces; per image texture the coarsest mip level that keeps at least one texel per\n"
            "pixel in at least one axis, and the memory of its pyramid before and after. Returns\n"
            "{'textures': [one dict per image texture], 'camera_rays', 'bounce_rays'}; commits first.")
+      .def("set_texture_levels",
+           [](Scene& s, const std::map<uint32_t, int>& levels) {
+             std::vector<std::pair<uint32_t, int>> v(levels.begin(), levels.end());
+             py::gil_scoped_release release;
+             s.set_texture_levels(v);
+           },
+           py::arg("levels"),
+           "Makes mip levels `level` and coarser of each texture's pyramid resident ({texture id: level};\n"
+           "textures sharing a pyramid get the finest level any asks for; clamped to [0, tail]), freeing\n"
+           "finer levels where they can be read back (docs/texture_lod.md). Textures not listed keep\n"
+           "their levels; a render makes every level of a pyramid nobody chose for resident first.")
+      .def("set_mip_cache_dir", &Scene::set_mip_cache_dir, py::arg("directory"),
+           "Keeps tiled mip-mapped copies of image files in this directory (written once, read lazily:\n"
+           "only the levels set_texture_levels asks for); '' turns it off.")
       .def("save", &Scene::save, py::arg("path"), "Writes the scene (XML + '.bin' sidecar) for replay.")
       .def_static("load", &Scene::load, py::arg("path"), "Replays a scene written by save().");
 }

@@ -54,6 +54,15 @@ PluginInfo render_info() {
       .add(param::integer("max_spp", 0, "adaptive sampling: most samples of a pixel (0: spp)").in(0, 1 << 20))
       .add(param::boolean("denoise", false, "denoise rgb after rendering (the feature-guided denoiser; the raw "
                                             "image stays available); labels are never filtered"))
+      .add(param::boolean("texture_lod", false, "texture level of detail: before rendering, estimate which mip "
+                                                "levels of each image texture the camera needs (at least one "
+                                                "texel per pixel) and keep only those in memory "
+                                                "(docs/texture_lod.md)"))
+      .add(param::integer("texture_lod_margin", 0, "texture_lod: keep this many levels finer than the estimate "
+                                                   "(each quadruples a texture's memory)").in(0, 8))
+      .add(param::real("texture_budget_mib", 256.0, "texture_lod: texture memory (MiB) above which textures "
+                                                    "the camera does not see drop their finer levels, least "
+                                                    "recently used first").at_least(0))
       .add(param::real("clamp_indirect", 0.0, "largest sum of RGB (displayed units, 1 = white) one indirect "
                                               "contribution of a sample may add; 0: no clamping (removes "
                                               "fireflies of caustics at the cost of some energy)").at_least(0));
@@ -77,6 +86,9 @@ std::shared_ptr<RenderSettings> create_render_settings(const Params& p, const Pl
   rs->target_psnr = p.get_float("target_psnr");
   rs->min_spp = uint32_t(p.get_int("min_spp"));
   rs->max_spp = uint32_t(p.get_int("max_spp"));
+  rs->texture_lod = p.get_bool("texture_lod");
+  rs->texture_lod_margin = uint32_t(p.get_int("texture_lod_margin"));
+  rs->texture_budget_mib = p.get_float("texture_budget_mib");
   return rs;
 }
 

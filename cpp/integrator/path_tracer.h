@@ -53,6 +53,15 @@ struct RenderSettings {
   /// Only the label outputs (depth, normal, albedo, ids, from the pixel-centre ray); rgb is
   /// left 0 and alpha is 1 where the pixel-centre ray hits. For masks (e.g. amodal ones).
   bool labels_only = false;
+  /// Texture level of detail (docs/texture_lod.md): before rendering, the texture resolution
+  /// estimate (integrator/texture_estimate.h) picks each pyramid's levels for the camera and
+  /// only those stay resident, `texture_lod_margin` levels finer than its guarantee of one
+  /// texel per pixel; pyramids the camera does not see keep their levels until the scene's
+  /// texture memory exceeds `texture_budget_mib`, then the least recently used drop to their
+  /// tail first (Scene).
+  bool texture_lod = false;
+  uint32_t texture_lod_margin = 0;
+  float texture_budget_mib = 256.f;
 
   void validate() const;
   /// Settings from parameters declared by plugin ("render", "path_tracer")

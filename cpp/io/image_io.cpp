@@ -208,7 +208,121 @@ bool save(const char* path, const ImageData* image, int bits, std::string* error
   }
 }
 
-const sg::ImageIoApi k_api = {sg::k_image_io_api_version, &load, &load_memory, &save};
+/// The file's attribute naming the format (a file that lacks it is not a synthgen mip file).
+constexpr const char* k_mip_tag = "synthgen:mipfile";
+
+bool save_mip(const char* path, const ImageData* levels, int count, const float* average, int average_count,
+              std::string* error) {
+  try {
+    if (count < 1) {
+      *error = "no levels to write";
+      return false;
+    }
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out || !out->supports("mipmap") || !out->supports("tiles")) {
+      *error = "no tiled, mip-mapped image writer for this file extension";
+      return false;
+    }
+    OIIO::ImageSpec spec(levels[0].width, levels[0].height, levels[0].channels, OIIO::TypeDesc::FLOAT);
+    spec.tile_width = spec.tile_height = 64;
+    spec.attribute("compression", "zip");
+    spec.attribute("textureformat", "Plain Texture");
+    spec.attribute("openexr:levelmode", 1);     // MIPMAP_LEVELS
+    spec.attribute("openexr:roundingmode", 0);  // ROUND_DOWN: halve, rounding down
+    spec.attribute(k_mip_tag, 1);
+    spec.attribute("synthgen:average", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, average_count), average);
+    if (!out->open(path, spec, OIIO::ImageOutput::Create)) {
+      *error = "cannot open for writing (" + out->geterror() + ")";
+      return false;
+    }
+    for (int l = 0; l < count; ++l) {
+      if (l > 0) {
+        OIIO::ImageSpec ls = spec;
+        ls.width = ls.full_width = levels[l].width;
+        ls.height = ls.full_height = levels[l].height;
+        if (!out->open(path, ls, OIIO::ImageOutput::AppendMIPLevel)) {
+          *error = "cannot add mip level " + std::to_string(l) + " (" + out->geterror() + ")";
+          return false;
+        }
+      }
+      if (!out->write_image(OIIO::TypeDesc::FLOAT, levels[l].pixels.data())) {
+        *error = "cannot write mip level " + std::to_string(l) + " (" + out->geterror() + ")";
+        return false;
+      }
+    }
+    if (!out->close()) {
+      *error = "cannot finish the file (" + out->geterror() + ")";
+      return false;
+    }
+    return true;
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return false;
+  }
+}
+
+bool load_mip(const char* path, int first, int count, int chbegin, int chend, sg::MipFileHeader* header,
+              std::vector<ImageData>* levels, std::string* error) {
+  try {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+      *error = "cannot open (" + OIIO::geterror() + ")";
+      return false;
+    }
+    const OIIO::ImageSpec& spec0 = in->spec();
+    if (spec0.get_int_attribute(k_mip_tag, 0) != 1) {
+      *error = "not a synthgen mip file";
+      return false;
+    }
+    header->channels = spec0.nchannels;
+    header->widths.clear();
+    header->heights.clear();
+    for (int l = 0; in->seek_subimage(0, l); ++l) {
+      header->widths.push_back(in->spec().width);
+      header->heights.push_back(in->spec().height);
+    }
+    const OIIO::ParamValue* avg = spec0.find_attribute("synthgen:average");
+    header->average.clear();
+    if (avg && avg->type().basetype == OIIO::TypeDesc::FLOAT)
+      for (int i = 0; i < int(avg->type().basevalues()) && i < 4; ++i)
+        header->average.push_back(static_cast<const float*>(avg->data())[i]);
+    if (header->channels < 1 || header->channels > 4 || header->widths.empty()) {
+      *error = "malformed mip file header";
+      return false;
+    }
+    levels->clear();
+    if (chend < 0) chend = header->channels;
+    if (count > 0 && (chbegin < 0 || chbegin >= chend || chend > header->channels)) {
+      *error = "no channels " + std::to_string(chbegin) + " to " + std::to_string(chend);
+      return false;
+    }
+    for (int l = first; l < first + count; ++l) {
+      if (l < 0 || l >= int(header->widths.size()) || !in->seek_subimage(0, l)) {
+        *error = "no mip level " + std::to_string(l);
+        return false;
+      }
+      ImageData img;
+      img.width = in->spec().width;
+      img.height = in->spec().height;
+      img.channels = chend - chbegin;
+      img.pixels.resize(size_t(img.width) * img.height * img.channels);
+      if (!in->read_image(0, l, chbegin, chend, OIIO::TypeDesc::FLOAT, img.pixels.data())) {
+        *error = "cannot read mip level " + std::to_string(l) + " (" + in->geterror() + ")";
+        return false;
+      }
+      levels->push_back(std::move(img));
+    }
+    return true;
+  } catch (const std::bad_alloc&) {
+    *error = "out of memory while reading the file";
+    return false;
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return false;
+  }
+}
+
+const sg::ImageIoApi k_api = {sg::k_image_io_api_version, &load, &load_memory, &save, &save_mip, &load_mip};
 
 }  // namespace
 

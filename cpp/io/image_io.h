@@ -58,6 +58,27 @@ ImageData load_image_from_memory(const void* data, size_t size, const std::strin
 /// Writes float pixels; 8/16-bit formats are chosen by `bits` (0 = float).
 void save_image(const std::string& path, const ImageData& image, int bits);
 
+/// A tiled, mip-mapped float image file (OpenEXR, 64 x 64 tiles, zip): `levels[0]` is the
+/// full image, each next level half the size (rounded down, at least 1: OpenEXR's
+/// ROUND_DOWN mode, the rule of texture/mipmap.h), all with the same channels; `average` is
+/// stored with it (metadata "synthgen:average", up to 4 values). The texture cache writes
+/// the pyramids it builds this way once (texture/image_cache.h), then reads only the levels
+/// a frame needs. Throws sg::FileError naming the file.
+void save_mip_file(const std::string& path, const std::vector<ImageData>& levels, const std::vector<float>& average);
+
+/// What a mip file holds: each level's size, the channels, the stored average.
+struct MipFileHeader {
+  int channels = 0;
+  std::vector<int> widths, heights;
+  std::vector<float> average;
+};
+/// Reads the header of a file written by save_mip_file, and channels [chbegin, chend) (-1:
+/// to the last) of levels [first, first + count) into `levels` (none for count 0). Throws
+/// sg::FileError naming the file when it cannot be read or is not such a file. Runs in this
+/// process: the file is synthgen's own cache.
+MipFileHeader load_mip_file(const std::string& path, int first, int count, std::vector<ImageData>* levels,
+                            int chbegin = 0, int chend = -1);
+
 /// Loads the OpenImageIO plugin now instead of at the first image read or write (a
 /// one-time cost of about 0.2 s: OpenImageIO and its format libraries). Throws sg::Error
 /// when the plugin cannot be loaded.
@@ -69,8 +90,12 @@ struct ImageIoApi {
   bool (*load)(const char* path, int space, ImageData* out, std::string* error);
   bool (*load_memory)(const void* data, size_t size, const char* hint, ImageData* out, std::string* error);
   bool (*save)(const char* path, const ImageData* image, int bits, std::string* error);
+  bool (*save_mip)(const char* path, const ImageData* levels, int count, const float* average, int average_count,
+                   std::string* error);
+  bool (*load_mip)(const char* path, int first, int count, int chbegin, int chend, MipFileHeader* header,
+                   std::vector<ImageData>* levels, std::string* error);
 };
-constexpr int k_image_io_api_version = 2;
+constexpr int k_image_io_api_version = 3;
 
 }  // namespace sg
 

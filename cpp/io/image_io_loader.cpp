@@ -148,4 +148,20 @@ void save_image(const std::string& path, const ImageData& image, int bits) {
   if (!api().save(path.c_str(), &image, bits, &err)) throw FileError(path, err);
 }
 
+void save_mip_file(const std::string& path, const std::vector<ImageData>& levels, const std::vector<float>& average) {
+  std::string err;
+  if (!api().save_mip(path.c_str(), levels.data(), int(levels.size()), average.data(), int(average.size()), &err))
+    throw FileError(path, err);
+}
+
+MipFileHeader load_mip_file(const std::string& path, int first, int count, std::vector<ImageData>* levels,
+                            int chbegin, int chend) {
+  MipFileHeader h;
+  std::vector<ImageData> tmp;
+  std::string err;
+  if (!api().load_mip(path.c_str(), first, count, chbegin, chend, &h, levels ? levels : &tmp, &err))
+    throw FileError(path, err);
+  return h;
+}
+
 }  // namespace sg

@@ -47,6 +47,16 @@ class ImageCache {
   uint64_t loads() const;  ///< files decoded so far
   uint64_t hits() const;   ///< requests served without decoding
 
+  /// Tiled mip-mapped copies of image files (docs/texture_lod.md): with a directory set, the
+  /// pyramid of every file (colour, then alpha) is written there once (io/image_io.h
+  /// save_mip_file, named by a hash of the resolved path, size, modification time and colour
+  /// space) and later requests read it lazily -- only the tail now, the levels a frame needs
+  /// when Scene applies the texture resolution estimate. Empty (the default): off.
+  void set_mip_cache_dir(const std::string& dir);
+  const std::string& mip_cache_dir() const { return m_mip_dir; }
+  uint64_t mip_files_written() const;  ///< cache files written so far
+  uint64_t mip_files_opened() const;   ///< requests served lazily from a cache file
+
  private:
   struct Entry {
     std::weak_ptr<const MipMap> mipmap;  ///< alive while some texture uses it
@@ -60,7 +70,17 @@ class ImageCache {
   Loader m_loader;
   std::map<std::pair<std::string, int>, Entry> m_entries;
   std::map<std::string, Memory> m_memory;
-  uint64_t m_loads = 0, m_hits = 0;
+  /// The pyramid of a decoded file: written to the mip cache and re-read from it when its
+  /// levels are dropped (with a cache directory), else whole and fixed. Alpha stays whole.
+  std::shared_ptr<const MipMap> decoded_pyramid(const ImageData& image, const std::string& cache_file);
+  std::string mip_cache_file(const std::string& key_path, int64_t size, int64_t mtime, ColorSpace space) const;
+  /// Erases entries whose pixels and pyramids no texture holds any more, every 256 new
+  /// entries: a long run adds generated images (plates, signs) every frame, and the maps must
+  /// not grow with them. Called with m_mutex held.
+  void sweep_expired();
+  uint64_t m_loads = 0, m_hits = 0, m_mip_written = 0, m_mip_opened = 0;
+  uint64_t m_new_entries = 0;
+  std::string m_mip_dir;
   mutable std::mutex m_mutex;
 };
 

@@ -122,10 +122,70 @@ MipMap::MipMap(const ImageData& image) {
             dst.data[(size_t(y) * dst.width + x) * nc + c] += t.weight * tmp[(size_t(t.index) * dst.width + x) * nc + c];
     m_levels.push_back(std::move(dst));
   }
+  set_tail();
+}
+
+MipMap::MipMap(const ImageData& image, MipSource source) : MipMap(image) { m_source = std::move(source); }
+
+MipMap::MipMap(std::vector<int> widths, std::vector<int> heights, int channels, const Color& average,
+               MipSource source, std::shared_ptr<const MipMap> alpha)
+    : m_channels(channels), m_average(average), m_alpha(std::move(alpha)), m_source(std::move(source)) {
+  if (widths.empty() || widths.size() != heights.size() || (channels != 1 && channels != 3) || !m_source)
+    throw Error("image texture: malformed lazy pyramid");
+  for (size_t l = 0; l < widths.size(); ++l) {
+    // Sizes must follow the halving rule (a file that disagrees is not a pyramid of ours).
+    int w = l ? std::max(1, widths[l - 1] / 2) : widths[0], h = l ? std::max(1, heights[l - 1] / 2) : heights[0];
+    if (widths[l] != w || heights[l] != h || w < 1 || h < 1)
+      throw Error("image texture: mip level " + std::to_string(l) + " has the wrong size");
+    Level lv;
+    lv.width = w;
+    lv.height = h;
+    m_levels.push_back(std::move(lv));
+  }
+  if (m_levels.back().width != 1 || m_levels.back().height != 1)
+    throw Error("image texture: the pyramid does not end at 1 x 1");
+  if (m_alpha && (m_alpha->width(0) != widths[0] || m_alpha->height(0) != heights[0]))
+    throw Error("image texture: the alpha channel's size differs from the image's");
+  set_tail();
+  m_first = m_resident = levels();  // nothing resident yet
+  use_levels(m_tail);
+}
+
+void MipMap::set_tail() {
+  m_tail = levels() - 1;
+  while (m_tail > 0 && std::max(width(m_tail - 1), height(m_tail - 1)) <= k_tail_texels) --m_tail;
+}
+
+void MipMap::use_levels(int first) const {
+  first = std::min(std::max(first, 0), m_tail);
+  if (first < m_resident) {
+    std::vector<std::vector<float>> data = m_source(first, m_resident - first);
+    if (int(data.size()) != m_resident - first)
+      throw Error("image texture: the pyramid's source returned too few levels");
+    for (int l = first; l < m_resident; ++l) {
+      std::vector<float>& d = data[size_t(l - first)];
+      if (d.size() != size_t(width(l)) * height(l) * m_channels)
+        throw Error("image texture: mip level " + std::to_string(l) + " read back with the wrong size");
+      m_levels[size_t(l)].data = std::move(d);
+    }
+    m_resident = first;
+  }
+  m_first = first;
+}
+
+void MipMap::drop_unused() const {
+  if (!m_source) return;
+  for (int l = m_resident; l < m_first; ++l) std::vector<float>().swap(m_levels[size_t(l)].data);
+  m_resident = std::max(m_resident, m_first);
+}
+
+void MipMap::make_resident(int first) const {
+  use_levels(first);
+  drop_unused();
 }
 
 Color MipMap::texel(int level, int x, int y, WrapMode wrap) const {
-  const Level& l = m_levels[size_t(level)];
+  const Level& l = m_levels[size_t(std::max(level, m_first))];
   size_t i = size_t(wrap_index(y, l.height, wrap)) * l.width + size_t(wrap_index(x, l.width, wrap));
   if (m_channels == 1) return Color(l.data[i]);
   const float* p = &l.data[3 * i];
@@ -133,7 +193,7 @@ Color MipMap::texel(int level, int x, int y, WrapMode wrap) const {
 }
 
 Color MipMap::bilinear(int level, float s, float t, WrapMode wrap) const {
-  const Level& l = m_levels[size_t(level)];
+  const Level& l = m_levels[size_t(std::max(level, m_first))];
   float x = reduce_coordinate(s, wrap) * float(l.width) - 0.5f;
   float y = reduce_coordinate(t, wrap) * float(l.height) - 0.5f;
   float fx = std::floor(x), fy = std::floor(y);
@@ -161,10 +221,12 @@ Color MipMap::lookup(float s, float t, float width, WrapMode wrap) const {
   // lookups in levels floor(lambda) and floor(lambda) + 1.
   const Level& l0 = m_levels[0];
   float texels = width * float(std::max(l0.width, l0.height));
-  if (!(texels > 1.f)) return bilinear(0, s, t, wrap);  // also catches NaN
+  if (!(texels > 1.f)) return bilinear(m_first, s, t, wrap);  // also catches NaN
   const int top = levels() - 1;
   float lambda = std::log2(texels);
   if (!(lambda < float(top))) return bilinear(top, s, t, wrap);
+  // Finer than the finest resident level: that level (docs/texture_lod.md).
+  if (lambda < float(m_first)) return bilinear(m_first, s, t, wrap);
   int k = int(lambda);
   float f = lambda - float(k);
   return bilinear(k, s, t, wrap) * (1.f - f) + bilinear(k + 1, s, t, wrap) * f;
@@ -185,7 +247,7 @@ Color MipMap::lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, W
   if (!std::isfinite(major)) return lookup(s, t, k_inf, wrap);  // overflow: the average
   // Magnification (the whole ellipse within a texel): bilinear in level 0, as lookup().
   const float texel = 1.f / float(std::max(m_levels[0].width, m_levels[0].height));
-  if (major <= texel) return bilinear(0, s, t, wrap);
+  if (major <= texel) return bilinear(m_first, s, t, wrap);
   // NOTE: Feline (McCormack, Perry, Farkas, Jouppi, "Feline: Fast Elliptical Lines for
   // Anisotropic Texture Mapping", SIGGRAPH 1999): n trilinear probes spaced along the
   // major axis, the mip level chosen from the minor axis; the eccentricity is clamped (here
@@ -215,7 +277,7 @@ uint64_t MipMap::bytes(int first_level) const {
   uint64_t n = 0;
   for (int l = std::max(first_level, 0); l < levels(); ++l)
     n += uint64_t(m_levels[size_t(l)].width) * uint64_t(m_levels[size_t(l)].height) * uint64_t(m_channels) * sizeof(float);
-  return n + (m_alpha ? m_alpha->bytes(first_level) : 0);
+  return n + (m_alpha ? m_alpha->bytes(0) : 0);
 }
 
 }  // namespace sg

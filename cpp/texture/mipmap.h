@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,6 +34,11 @@ enum class WrapMode { Repeat, Clamp, Mirror };
 /// parameter 'wrap' otherwise.
 WrapMode parse_wrap_mode(const std::string& s, const std::string& context);
 
+/// Where a pyramid's colour levels come back from once dropped (MipMap::make_resident):
+/// returns the texel data (MipMap::channels() values per texel, row-major) of levels
+/// [first, first + count). Throws sg::Error (sg::FileError for files) when it cannot.
+using MipSource = std::function<std::vector<std::vector<float>>(int first, int count)>;
+
 class MipMap {
  public:
   /// Builds the pyramid of `image` (1 or 2 channels: grey, replicated to RGB; 3 or more:
@@ -40,6 +46,16 @@ class MipMap {
   /// of a 4+-channel image) gets a separate one-channel pyramid (alpha()).
   /// Throws sg::Error for an empty image.
   explicit MipMap(const ImageData& image);
+  /// The same, with a source that rebuilds or re-reads the colour levels after
+  /// make_resident dropped them (without one, levels are never dropped).
+  MipMap(const ImageData& image, MipSource source);
+  /// A pyramid read lazily from `source`: level sizes, channels (1 or 3) and the average
+  /// given; only the tail (levels at most k_tail_texels on a side) is read now, the rest when
+  /// use_levels asks for it (Scene::render: the texture resolution estimate's levels, or
+  /// every level without RenderSettings::texture_lod).
+  /// `alpha`: the pyramid of its alpha channel (whole), or null.
+  MipMap(std::vector<int> widths, std::vector<int> heights, int channels, const Color& average, MipSource source,
+         std::shared_ptr<const MipMap> alpha = nullptr);
 
   int levels() const { return int(m_levels.size()); }
   int width(int level) const { return m_levels[size_t(level)].width; }
@@ -63,9 +79,38 @@ class MipMap {
   Color lookup_ellipse(float s, float t, const Vec2f& a, const Vec2f& b, WrapMode wrap) const;
   static constexpr int k_max_probes = 8;
 
-  /// Bytes of the texels of levels `first_level` and coarser (the alpha pyramid's included):
-  /// the memory a texture holds when it keeps only those levels.
+  /// Bytes of the texels of colour levels `first_level` and coarser plus the whole alpha
+  /// pyramid (cut-outs stay exact: they decide the labels): the memory the pyramid holds
+  /// with those levels resident.
   uint64_t bytes(int first_level = 0) const;
+
+  // Residency (docs/texture_lod.md). Lookups read levels first_used() and coarser only: a
+  // footprint that asks for a finer one reads that level (bilinear there). Levels from
+  // first_resident() <= first_used() on are in memory (finer ones than used may stay,
+  // cached for later frames); levels at most k_tail_texels on a side stay resident always.
+  static constexpr int k_tail_texels = 64;
+  /// The finest colour level lookups read.
+  int first_used() const { return m_first; }
+  /// The finest colour level in memory.
+  int first_resident() const { return m_resident; }
+  /// The first level of the tail: the finest level make_resident may leave as the finest.
+  int tail_level() const { return m_tail; }
+  /// Gives a pyramid built from pixels the source its dropped levels come back from.
+  void set_source(MipSource source) { m_source = std::move(source); }
+  /// True when dropped levels can come back (a source is known).
+  bool can_drop_levels() const { return bool(m_source); }
+  /// Lookups read colour levels `first` (clamped to [0, tail_level()]) and coarser: they are
+  /// read from the source when not resident; finer resident levels stay (drop_unused frees
+  /// them). NOTE: none of the residency calls is safe while lookups run: Scene calls them
+  /// between renders only (build, then commit, then render).
+  void use_levels(int first) const;
+  /// use_levels(first), then frees the levels finer than it (only with a source).
+  void make_resident(int first) const;
+  /// Frees the resident levels finer than first_used() (only with a source).
+  void drop_unused() const;
+
+  /// The texels of a level (empty when it is not resident); for sources and tests.
+  const std::vector<float>& level_data(int level) const { return m_levels[size_t(level)].data; }
 
   /// Pyramid of the alpha channel (one channel), null when the image has none.
   const MipMap* alpha() const { return m_alpha.get(); }
@@ -73,12 +118,17 @@ class MipMap {
  private:
   struct Level {
     int width = 0, height = 0;
-    std::vector<float> data;  ///< row-major, m_channels floats per texel
+    std::vector<float> data;  ///< row-major, m_channels floats per texel (empty: not resident)
   };
-  std::vector<Level> m_levels;
+  void set_tail();
+  // NOTE: mutable: residency changes between renders (make_resident), never during one.
+  mutable std::vector<Level> m_levels;
   int m_channels = 3;
   Color m_average{0.f};
   std::shared_ptr<const MipMap> m_alpha;
+  MipSource m_source;
+  int m_tail = 0;
+  mutable int m_first = 0, m_resident = 0;
 };
 
 /// Parameters of an image texture besides its pixels.

@@ -253,7 +253,7 @@ def test_yaml12_floats_and_defaults(tmp_path):
     assert settings == {"spp": 16, "max_depth": 8, "rr_depth": 5, "seed": 0, "threads": 0, "tile_size": 16,
                         "texture_filtering": True, "exposure": 1.0, "clamp_indirect": 0.0, "noise_threshold": 0.0,
                         "target_psnr": 0.0, "min_spp": 0, "max_spp": 0, "denoise": False, "max_medium_depth": 64,
-                        "next_event": True}
+                        "next_event": True, "texture_lod": False, "texture_lod_margin": 0, "texture_budget_mib": 256.0}
     assert meta["objects"][0]["instance_id"] == 1 and meta["objects"][0]["class_id"] == 1
     assert meta["lights"] == [{"name": None, "type": "point", "id": 0}]
 

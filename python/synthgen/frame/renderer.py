@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
+import os
 import time
 from typing import Any, Dict, List, Mapping, Optional, Set, Tuple
 
@@ -116,6 +117,12 @@ class FrameRenderer:
         self.default_material: Optional[int] = None
         self.mapped: Set[int] = set()     # instances that have a per-instance material map
         self.objects: List[PlacedObject] = []
+        if scenario.spec["render"]["texture_lod"]:
+            # Tiled mip-mapped copies of image files, shared by workers and runs: each frame
+            # reads only the levels its camera needs (docs/texture_lod.md).
+            from ..scene.assets import cache_dir
+
+            self.scene.set_mip_cache_dir(os.path.join(cache_dir(), "mips"))
         bg = scenario.spec["background"]
         self.photos = None
         if bg is not None:
@@ -324,6 +331,10 @@ class FrameRenderer:
                         if spec.weather else None),
             # Which image rgb is: the render's mean ("raw") or the denoiser's output ("denoised").
             "rgb": "denoised" if rs["denoise"] else "raw",
+            # Texel memory of the image textures: every level, and as rendered (texture_lod keeps
+            # the levels the camera needs: docs/texture_lod.md).
+            "texture_memory": {"full_bytes": int(res.stats["texture_bytes_full"]),
+                               "resident_bytes": int(res.stats["texture_bytes_resident"])},
             # What this frame shares with others, for the train/val split (outputs.split): its
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
@@ -364,6 +375,8 @@ class FrameRenderer:
         if spec.post:
             meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]
         timings = {"update_s": t_update - f.t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
+        if rs["texture_lod"]:
+            timings["texture_lod_s"] = float(res.stats["texture_lod_time_s"])
         if fp is not None:  # compositing, camera matching and labels of a photo frame
             timings["photo_s"] = time.perf_counter() - t_render
         return arrays, meta, timings

@@ -11,9 +11,18 @@ from .._core import load_image_plugin
 from ..frame import FrameRenderer
 from ..scenario import Scenario
 
-__all__ = ["render_task"]
+__all__ = ["render_task", "resident_bytes"]
 
 _WORKER: Dict[str, Any] = {}
+
+
+def resident_bytes() -> int:
+    """This process's resident memory (Linux /proc/self/statm; 0 elsewhere)."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
 
 
 def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) -> Dict[str, Any]:
@@ -36,7 +45,8 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) 
         _WORKER["frames"] += 1
         dropped = [{"index": o["index"], "class": o["class"], "reason": o["dropped"]}
                    for o in meta["objects"] if o.get("dropped")]
-        return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid()}
+        return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid(),
+                "rss_bytes": resident_bytes()}
     except Exception as e:  # reported per frame; the run goes on
         return {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",
                 "traceback": traceback.format_exc(), "pid": os.getpid()}

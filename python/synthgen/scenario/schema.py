@@ -175,7 +175,8 @@ BACKGROUND = Record(
 
 #: The render settings a scenario sets (the seed of each frame derives from the scenario's).
 RENDER_KEYS = ("spp", "max_depth", "rr_depth", "threads", "clamp_indirect", "noise_threshold", "target_psnr",
-               "min_spp", "max_spp", "denoise", "max_medium_depth")
+               "min_spp", "max_spp", "denoise", "max_medium_depth", "texture_lod", "texture_lod_margin",
+               "texture_budget_mib")
 RENDER = settings_record("render", "path_tracer", keys=RENDER_KEYS, default=EMPTY,
                          doc="path tracing settings (threads: per worker; 0 = all cores / workers)")
 
