@@ -339,8 +339,7 @@ class CoatedMaterial final : public Material {
 
  public:
   int specular_events(const SurfaceInteraction&, SpecularEvent out[4]) const override {
-    if (m_invisible || !(m_specular > 0.f) || std::max(m_ggx.ax, m_ggx.ay) > roughness_to_alpha(k_sharp_roughness))
-      return 0;
+    if (m_invisible || !(m_specular > 0.f) || !m_ggx.sharp()) return 0;
     out[0] = SpecularEvent{};
     return 1;
   }

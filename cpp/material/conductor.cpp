@@ -89,7 +89,7 @@ class ConductorMaterial final : public Material {
   }
 
   int specular_events(const SurfaceInteraction&, SpecularEvent out[4]) const override {
-    if (std::max(m_ggx.ax, m_ggx.ay) > roughness_to_alpha(k_sharp_roughness)) return 0;
+    if (!m_ggx.sharp()) return 0;
     out[0] = SpecularEvent{};
     return 1;
   }

@@ -276,7 +276,7 @@ class DielectricMaterial final : public Material {
 
  public:
   int specular_events(const SurfaceInteraction&, SpecularEvent out[4]) const override {
-    if (std::max(m_ggx.ax, m_ggx.ay) > roughness_to_alpha(k_sharp_roughness)) return 0;
+    if (!m_ggx.sharp()) return 0;
     out[0] = SpecularEvent{};
     out[1] = SpecularEvent{true, m_thin ? 1.f : m_eta};
     return 2;

@@ -19,6 +19,9 @@ struct GGX {
 
   GGX(float alpha_x, float alpha_y) : ax(std::max(alpha_x, 1e-4f)), ay(std::max(alpha_y, 1e-4f)) {}
 
+  /// True when no axis is rougher than k_sharp_roughness (Material::specular_events).
+  bool sharp() const { return std::max(ax, ay) <= k_sharp_roughness * k_sharp_roughness; }
+
   /// Normal distribution D(m).
   /// NOTE: Walter et al. 2007, "Microfacet Models for Refraction", eq. 33, anisotropic form
   /// D = 1 / (pi ax ay (x^2/ax^2 + y^2/ay^2 + z^2)^2) (Heitz 2014, eq. 85).

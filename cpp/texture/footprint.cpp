@@ -11,17 +11,20 @@ namespace {
 
 thread_local FootprintRecorder* t_recorder = nullptr;
 
-void add(FootprintRecorder::Use& u, const MipMap& mip, const Vec2f& a, const Vec2f& b) {
-  const int n = mip.levels();
-  if (u.min_rho.empty()) u.min_rho.assign(size_t(n), k_inf);
-  for (int l = 0; l < n && l < int(u.min_rho.size()); ++l) {
+/// A lookup's rho_L for every level of `mip` (NaN: the footprint says nothing).
+std::vector<float> level_rho(const MipMap& mip, const Vec2f& a, const Vec2f& b) {
+  std::vector<float> rho(size_t(mip.levels()));
+  for (int l = 0; l < mip.levels(); ++l) {
     float w = float(mip.width(l)), h = float(mip.height(l));
-    float ra = std::hypot(a.x * w, a.y * h), rb = std::hypot(b.x * w, b.y * h);
-    float rho = std::max(ra, rb);
-    if (!(rho >= 0.f)) continue;  // NaN footprints say nothing
-    float& m = u.min_rho[size_t(l)];
-    m = std::min(m, rho);
+    rho[size_t(l)] = std::max(std::hypot(a.x * w, a.y * h), std::hypot(b.x * w, b.y * h));
   }
+  return rho;
+}
+
+void add(FootprintRecorder::Use& u, const std::vector<float>& rho) {
+  if (u.min_rho.empty()) u.min_rho.assign(rho.size(), k_inf);
+  for (size_t l = 0; l < rho.size() && l < u.min_rho.size(); ++l)
+    if (rho[l] >= 0.f) u.min_rho[l] = std::min(u.min_rho[l], rho[l]);  // NaN footprints say nothing
   ++u.lookups;
 }
 
@@ -47,8 +50,9 @@ void FootprintRecorder::record(const Texture* texture, const MipMap& mip, Vec2f 
     a = Vec2f(m[0] * hit_a.x + m[1] * hit_a.y, m[2] * hit_a.x + m[3] * hit_a.y);
     b = Vec2f(m[0] * hit_b.x + m[1] * hit_b.y, m[2] * hit_b.x + m[3] * hit_b.y);
   }
-  add(by_mip[&mip], mip, a, b);
-  if (texture) add(by_texture[texture], mip, a, b);
+  const std::vector<float> rho = level_rho(mip, a, b);
+  add(by_mip[&mip], rho);
+  if (texture) add(by_texture[texture], rho);
 }
 
 void FootprintRecorder::merge(const FootprintRecorder& other) {
@@ -56,11 +60,17 @@ void FootprintRecorder::merge(const FootprintRecorder& other) {
   for (const auto& [tex, use] : other.by_texture) merge_use(by_texture[tex], use);
 }
 
-FootprintRecorder* active_footprint_recorder() { return t_recorder; }
+std::atomic<int> g_footprint_recorders{0};
+
+FootprintRecorder* thread_footprint_recorder() { return t_recorder; }
 
 ScopedFootprintRecorder::ScopedFootprintRecorder(FootprintRecorder* recorder) : m_previous(t_recorder) {
   t_recorder = recorder;
+  g_footprint_recorders.fetch_add(1, std::memory_order_relaxed);
 }
-ScopedFootprintRecorder::~ScopedFootprintRecorder() { t_recorder = m_previous; }
+ScopedFootprintRecorder::~ScopedFootprintRecorder() {
+  t_recorder = m_previous;
+  g_footprint_recorders.fetch_sub(1, std::memory_order_relaxed);
+}
 
 }  // namespace sg

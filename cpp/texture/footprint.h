@@ -19,6 +19,7 @@
 // both sides alike.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
@@ -57,8 +58,15 @@ class FootprintRecorder {
   std::unordered_map<const Texture*, Use> by_texture;
 };
 
+/// Recorders in scope on any thread: renders, which never record, then skip the thread-local
+/// lookup (a call into the TLS machinery of a shared library) on every texture lookup.
+extern std::atomic<int> g_footprint_recorders;
+FootprintRecorder* thread_footprint_recorder();
+
 /// The recorder active on this thread (null while rendering).
-FootprintRecorder* active_footprint_recorder();
+inline FootprintRecorder* active_footprint_recorder() {
+  return g_footprint_recorders.load(std::memory_order_relaxed) ? thread_footprint_recorder() : nullptr;
+}
 
 /// Makes `recorder` the thread's active recorder for the scope.
 class ScopedFootprintRecorder {

@@ -106,7 +106,8 @@ std::shared_ptr<const MipMap> ImageCache::get(const std::string& path, ColorSpac
       for (int l = first; l < first + count; ++l) out.push_back(full.level_data(l));
       return out;
     };
-    auto mip = std::make_shared<const MipMap>(srgb ? srgb_decoded(*px) : *px, std::move(rebuild));
+    auto mip = std::make_shared<MipMap>(srgb ? srgb_decoded(*px) : *px);
+    mip->set_source(std::move(rebuild));
     e.mipmap = mip;
     return mip;
   }

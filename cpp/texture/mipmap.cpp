@@ -125,8 +125,6 @@ MipMap::MipMap(const ImageData& image) {
   set_tail();
 }
 
-MipMap::MipMap(const ImageData& image, MipSource source) : MipMap(image) { m_source = std::move(source); }
-
 MipMap::MipMap(std::vector<int> widths, std::vector<int> heights, int channels, const Color& average,
                MipSource source, std::shared_ptr<const MipMap> alpha)
     : m_channels(channels), m_average(average), m_alpha(std::move(alpha)), m_source(std::move(source)) {

@@ -46,9 +46,6 @@ class MipMap {
   /// of a 4+-channel image) gets a separate one-channel pyramid (alpha()).
   /// Throws sg::Error for an empty image.
   explicit MipMap(const ImageData& image);
-  /// The same, with a source that rebuilds or re-reads the colour levels after
-  /// make_resident dropped them (without one, levels are never dropped).
-  MipMap(const ImageData& image, MipSource source);
   /// A pyramid read lazily from `source`: level sizes, channels (1 or 3) and the average
   /// given; only the tail (levels at most k_tail_texels on a side) is read now, the rest when
   /// use_levels asks for it (Scene::render: the texture resolution estimate's levels, or
@@ -95,10 +92,9 @@ class MipMap {
   int first_resident() const { return m_resident; }
   /// The first level of the tail: the finest level make_resident may leave as the finest.
   int tail_level() const { return m_tail; }
-  /// Gives a pyramid built from pixels the source its dropped levels come back from.
+  /// Gives a pyramid built from pixels the source its dropped levels come back from (without
+  /// one, levels are never dropped).
   void set_source(MipSource source) { m_source = std::move(source); }
-  /// True when dropped levels can come back (a source is known).
-  bool can_drop_levels() const { return bool(m_source); }
   /// Lookups read colour levels `first` (clamped to [0, tail_level()]) and coarser: they are
   /// read from the source when not resident; finer resident levels stay (drop_unused frees
   /// them). NOTE: none of the residency calls is safe while lookups run: Scene calls them
