@@ -351,4 +351,109 @@ void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size],
   }
 }
 
+namespace {
+
+/// Closest point of triangle (a, b, c) to p.
+/// NOTE: Ericson, Real-Time Collision Detection (2005), section 5.1.5 "Closest point on
+/// triangle to point": Voronoi regions of the vertices, then edges, then the face, tested
+/// with barycentric sign checks; no normal needed, exact for slivers.
+Vec3f closest_on_triangle(const Vec3f& p, const Vec3f& a, const Vec3f& b, const Vec3f& c) {
+  const Vec3f ab = b - a, ac = c - a, ap = p - a;
+  const float d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0.f && d2 <= 0.f) return a;
+  const Vec3f bp = p - b;
+  const float d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0.f && d4 <= d3) return b;
+  const float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.f && d1 >= 0.f && d3 <= 0.f) return a + ab * (d1 / (d1 - d3));
+  const Vec3f cp = p - c;
+  const float d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0.f && d5 <= d6) return c;
+  const float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.f && d2 >= 0.f && d6 <= 0.f) return a + ac * (d2 / (d2 - d6));
+  const float va = d3 * d6 - d5 * d4;
+  if (va <= 0.f && (d4 - d3) >= 0.f && (d5 - d6) >= 0.f) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const float denom = 1.f / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+struct ClosestQuery {
+  const TriangleMesh* mesh;
+  float best;
+  uint32_t prim;
+};
+
+/// Embree point-query callback: shrinks the query radius to the closest triangle so far
+/// (Embree then skips BVH nodes farther than it).
+bool closest_triangle(RTCPointQueryFunctionArguments* args) {
+  auto* q = static_cast<ClosestQuery*>(args->userPtr);
+  const auto& m = *q->mesh;
+  const uint32_t* t = &m.indices[3 * size_t(args->primID)];
+  const Vec3f p(args->query->x, args->query->y, args->query->z);
+  const float d = length(p - closest_on_triangle(p, m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]));
+  if (d < args->query->radius) {
+    args->query->radius = d;
+    q->best = d;
+    q->prim = args->primID;
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<float> surface_distances(const TriangleMesh& mesh, const std::vector<Vec3f>& points,
+                                     std::vector<uint32_t>* closest) {
+  if (mesh.triangle_count() == 0) throw Error("surface_distances: the mesh '" + mesh.name + "' has no triangles");
+  for (const Vec3f& p : points)
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw Error("surface_distances: a query point is not finite");
+  for (uint32_t i : mesh.indices)
+    if (i >= mesh.positions.size()) throw Error("surface_distances: a triangle index is out of range");
+  std::string error;
+  RTCDevice device = rtcNewDevice("verbose=0");
+  rtcSetDeviceErrorFunction(device, embree_error, &error);
+  RTCScene scene = rtcNewScene(device);
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), mesh.positions.size()));
+  auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(uint32_t), mesh.triangle_count()));
+  if (!v || !idx) {
+    rtcReleaseGeometry(geom);
+    rtcReleaseScene(scene);
+    rtcReleaseDevice(device);
+    throw Error("Embree could not allocate buffers for mesh '" + mesh.name + "': " + error);
+  }
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    v[3 * i] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+  std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene);
+  std::vector<float> out(points.size());
+  if (closest) closest->assign(points.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    RTCPointQuery query;
+    query.x = points[i].x;
+    query.y = points[i].y;
+    query.z = points[i].z;
+    query.time = 0.f;
+    query.radius = k_inf;
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    ClosestQuery q{&mesh, k_inf, 0};
+    rtcPointQuery(scene, &query, &context, closest_triangle, &q);
+    out[i] = q.best;
+    if (closest) (*closest)[i] = q.prim;
+  }
+  rtcReleaseScene(scene);
+  rtcReleaseDevice(device);
+  return out;
+}
+
 }  // namespace sg

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "core/math.h"
 #include "geometry/mesh.h"
@@ -61,6 +62,14 @@ enum class RayLayer : uint32_t { all = 0xffffffffu, catchers = 0x2u };
 /// deterministic. The geometry layer knows nothing of materials: the integration layer
 /// installs the test (Accel::set_alpha_test).
 using AlphaTest = bool (*)(const void* user, uint32_t inst, uint32_t prim, float u, float v);
+
+/// Distance from each point to the closest point of the mesh's surface: exact (closest point
+/// on each candidate triangle), with Embree point queries over a BVH of the triangles built for
+/// the call. Measures how far a model's level of detail strays from its finest level
+/// (synthgen.scene.lod). With `closest`, also the index of each point's closest triangle.
+/// Throws sg::Error on an empty mesh, out-of-range indices or non-finite points.
+std::vector<float> surface_distances(const TriangleMesh& mesh, const std::vector<Vec3f>& points,
+                                     std::vector<uint32_t>* closest = nullptr);
 
 class Accel {
  public:

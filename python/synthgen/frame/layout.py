@@ -230,9 +230,9 @@ def _depth(objects: Sequence[PlacedObject], k: int) -> int:
     return n
 
 
-def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int) -> Tuple[int, int]:
+def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int, mask: bool = False) -> Tuple[Any, ...]:
     """(amodal pixels inside the image, amodal pixels on a canvas padded by TRUNCATION_PAD on
-    every side) of object k rendered alone."""
+    every side) of object k rendered alone; with ``mask``, also that padded mask (bool)."""
     w, h = view.resolution
     pw, ph = int(round(TRUNCATION_PAD * w)), int(round(TRUNCATION_PAD * h))
     K = np.asarray(camera.K, np.float64)
@@ -244,9 +244,9 @@ def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int) -> Tuple[int, 
         view.scene.set_instance_visible(d, False)
     if view.ground is not None:
         view.scene.set_instance_visible(view.ground, False)
-    mask = np.asarray(view.labels(padded).instance_id) == k + 1
-    inside = int(mask[ph:ph + h, pw:pw + w].sum())
-    return inside, int(mask.sum())
+    pixels = np.asarray(view.labels(padded).instance_id) == k + 1
+    inside = int(pixels[ph:ph + h, pw:pw + w].sum())
+    return (inside, int(pixels.sum())) + ((pixels,) if mask else ())
 
 
 def _put(view: FrameView, o: PlacedObject, spot: Spot) -> None:

@@ -15,7 +15,7 @@ from ..outputs.kitti import wrap_angle
 from ..scenario.sample import CameraSpec, ObjectSpec
 from .resources import Shape
 
-__all__ = ["PlacedObject", "frame_camera", "object_records"]
+__all__ = ["PlacedObject", "frame_camera", "object_records", "weather_labels"]
 
 
 @dataclass
@@ -140,3 +140,28 @@ def object_records(objects: Sequence[PlacedObject], keep: Sequence[bool], droppe
                     "alpha": float(wrap_angle(ry - math.atan2(loc_cam[0], loc_cam[2])))})
         out.append(rec)
     return out
+
+
+def weather_labels(records: List[Dict[str, Any]], transmittance: np.ndarray, rgb: np.ndarray,
+                   instance_id: np.ndarray) -> None:
+    """Per visible object of a foggy frame, ``weather``: ``transmittance``, the mean over its
+    pixels of the medium's transmittance along the camera ray to it (the share of its own light
+    that reaches the camera: Koschmieder's factor), and ``contrast``, its visible contrast in
+    the rendered image, |Y_object - Y_surround| / Y_surround (luminance; the surround: the
+    unlabelled pixels within 3 pixels of it), so that objects fog has made invisible can be
+    filtered."""
+    from ..post.photo.measure import dilate
+
+    y = np.asarray(rgb, np.float64)[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
+    for rec in records:
+        if rec.get("dropped") or not rec.get("visible_pixels"):
+            continue
+        mask = instance_id == rec["instance_id"]
+        if not mask.any():
+            continue
+        ring = dilate(mask, 3) & (instance_id == 0)
+        y_obj = float(y[mask].mean())
+        y_ring = float(y[ring].mean()) if ring.any() else float("nan")
+        contrast = abs(y_obj - y_ring) / y_ring if ring.any() and y_ring > 1e-6 else float("nan")
+        rec["weather"] = {"transmittance": round(float(np.asarray(transmittance)[mask].mean()), 6),
+                          "contrast": round(contrast, 6) if np.isfinite(contrast) else None}

@@ -27,8 +27,9 @@ from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
 from ..scenario.schema import RENDER_KEYS
 from ..scene import primitives as P
 from ..scene.vehicles import AXES, model_axes
-from .layout import FrameView, amodal_pixels, search_layout
-from .records import PlacedObject, frame_camera, level_frame, object_records
+from .layout import FrameView, search_layout
+from .lod import amodal_and_levels
+from .records import PlacedObject, frame_camera, level_frame, object_records, weather_labels
 from .resources import FrameLibrary, Pool, Shape, Shapes, realize
 
 __all__ = ["FrameRenderer", "FrameSetup", "light_plugin"]
@@ -92,6 +93,7 @@ class FrameSetup:
     t0: float
     t_update: float
     t_layout: float
+    geometry_lod: Optional[Dict[str, Any]] = None  #: meta ``geometry_lod`` (None: no levels shown)
 
 
 class FrameRenderer:
@@ -237,7 +239,7 @@ class FrameRenderer:
         self._set_ground(spec)
         objects = self._set_objects(spec)
         previous.release()
-        self.objects = objects  # the frame's placed objects (for tools and tests)
+        self.objects, self.camera = objects, camera  # the frame's placed objects and camera (tools, tests)
         t_update = time.perf_counter()
 
         view = FrameView(self.scene, objects, self.decor.ids, self.ground, sc.resolution, self.threads)
@@ -255,7 +257,7 @@ class FrameRenderer:
         for o in objects:
             if not o.spec.labelled:
                 self.scene.set_instance_labels(o.instance, 0, 0)
-        amodal = {k: amodal_pixels(view, camera, k) for k in range(len(objects)) if keep[k] and objects[k].spec.labelled}
+        amodal, geometry_lod = amodal_and_levels(self.shapes, view, objects, keep, camera, sc.spec["render"])
         view.show(keep)
         render_seed = int(np.random.SeedSequence([sc.seed, int(frame), 3]).generate_state(1, np.uint64)[0])
         if fp is not None and sc.spec["background"]["dome"]:
@@ -266,12 +268,11 @@ class FrameRenderer:
         self.scene.commit()
         return FrameSetup(frame=frame, spec=spec, fp=fp, photo_info=photo_info, camera=camera, objects=objects,
                           layout=layout, keep=keep, amodal=amodal, render_seed=render_seed, weather_ctx=weather_ctx,
-                          t0=t0, t_update=t_update, t_layout=t_layout)
+                          t0=t0, t_update=t_update, t_layout=t_layout, geometry_lod=geometry_lod)
 
     def render(self, frame: int) -> Tuple[Dict[str, np.ndarray], Dict[str, Any], Dict[str, float]]:
         """(arrays, meta, timings) of one frame."""
-        f = self.prepare(frame)
-        sc = self.sc
+        f, sc = self.prepare(frame), self.sc
         rs = sc.spec["render"]
         spec, fp, photo_info, camera, objects = f.spec, f.fp, f.photo_info, f.camera, f.objects
         layout, keep, amodal, render_seed, weather_ctx = f.layout, f.keep, f.amodal, f.render_seed, f.weather_ctx
@@ -339,6 +340,8 @@ class FrameRenderer:
             # layout is its own (every frame draws a new one).
             "split_keys": [f"layout:{sc.sha256[:16]}:{int(frame)}"],
         }
+        if f.geometry_lod is not None:  # levels of detail used, what they saved (docs/geometry_lod.md)
+            meta["geometry_lod"] = f.geometry_lod
         # Vehicles' plates: where each plate and each of its characters is in the image.
         for k, rec in enumerate(meta["objects"]):
             if keep[k] and "plates" in rec and objects[k].shape.plates:
@@ -364,7 +367,7 @@ class FrameRenderer:
         if transmittance is None and self.scene.medium_type() is not None:
             transmittance = self.scene.camera_transmittance(np.asarray(res.distance))
         if transmittance is not None:
-            _weather_labels(meta["objects"], transmittance, arrays["rgb"], arrays["instance_id"])
+            weather_labels(meta["objects"], transmittance, arrays["rgb"], arrays["instance_id"])
         if fp is None and photo_meta is not None:
             meta["background"] = photo_meta
         if fp is not None:
@@ -591,28 +594,3 @@ class FrameRenderer:
         if o.roll or o.pitch:
             return tilted(m, dims, o.roll, o.pitch) + (dims, None)
         return m, 0.5 * math.hypot(dims[0], dims[2]), dims, None
-
-
-def _weather_labels(records: List[Dict[str, Any]], transmittance: np.ndarray, rgb: np.ndarray,
-                    instance_id: np.ndarray) -> None:
-    """Per visible object of a foggy frame, ``weather``: ``transmittance``, the mean over its
-    pixels of the medium's transmittance along the camera ray to it (the share of its own light
-    that reaches the camera: Koschmieder's factor), and ``contrast``, its visible contrast in
-    the rendered image, |Y_object - Y_surround| / Y_surround (luminance; the surround: the
-    unlabelled pixels within 3 pixels of it), so that objects fog has made invisible can be
-    filtered."""
-    from ..post.photo.measure import dilate
-
-    y = np.asarray(rgb, np.float64)[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
-    for rec in records:
-        if rec.get("dropped") or not rec.get("visible_pixels"):
-            continue
-        mask = instance_id == rec["instance_id"]
-        if not mask.any():
-            continue
-        ring = dilate(mask, 3) & (instance_id == 0)
-        y_obj = float(y[mask].mean())
-        y_ring = float(y[ring].mean()) if ring.any() else float("nan")
-        contrast = abs(y_obj - y_ring) / y_ring if ring.any() and y_ring > 1e-6 else float("nan")
-        rec["weather"] = {"transmittance": round(float(np.asarray(transmittance)[mask].mean()), 6),
-                          "contrast": round(contrast, 6) if np.isfinite(contrast) else None}

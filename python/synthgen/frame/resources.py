@@ -20,7 +20,18 @@ from .. import randomize
 from ..scene import primitives as P
 from ..scene.assets import AssetError
 
-__all__ = ["Shape", "Shapes", "FrameLibrary", "Pool"]
+__all__ = ["Shape", "Shapes", "FrameLibrary", "Pool", "mesh_bytes"]
+
+
+def mesh_bytes(arrays: Mapping[str, Any]) -> int:
+    """Bytes of a mesh's arrays as the scene stores them (float32 positions, normals, uvs;
+    uint32 indices, int32 material ids; the BVH not counted)."""
+    n = 0
+    for key, size in (("positions", 12), ("normals", 12), ("uvs", 8)):
+        if arrays.get(key) is not None:
+            n += size * len(arrays[key])
+    tri = len(np.asarray(arrays["indices"]).reshape(-1, 3))
+    return n + 12 * tri + (4 * tri if arrays.get("material_ids") is not None else 0)
 
 
 class Shape:
@@ -46,6 +57,13 @@ class Shape:
         self.lamp_material: Optional[Dict[str, int]] = None
         #: Material ids of the model by the role its entry gives them ("paint": [...]).
         self.roles: Dict[str, List[int]] = {}
+        #: Levels of detail of a library model whose entry lists them (synthgen.scene.lod): the
+        #: geometric error of each (mesh units, finest first, the finest's 0) and, once made,
+        #: each level's (mesh, triangles, bytes of its arrays) (level 0: this shape's mesh).
+        self.lod_errors: Tuple[float, ...] = (0.0,)
+        self.lod_meshes: Dict[int, Tuple[int, int, int]] = {}
+        self.lod_unusable: Dict[int, str] = {}  #: levels that cannot carry the model's parts, and why
+        self._lod: Optional[Dict[str, Any]] = None  # what making a level needs (Shapes.level_mesh)
 
 
 class Shapes:
@@ -126,10 +144,8 @@ class Shapes:
                     lamp_material = {name: scene.add_material("coated", {"albedo": list(LAMP_KINDS[k]["lens"]),
                                                                           "roughness": 0.05, "specular": 0.5})
                                      for name, k, _ in lamp_names(entry)}
-                mids = np.asarray(arrays["material_ids"])
-                if mids.size == 0 or (mids < 0).any():
-                    arrays = dict(arrays, material_ids=np.where(mids < 0, self._grey(), mids) if mids.size else
-                                  np.full(len(arrays["indices"]), self._grey(), np.int32))
+                arrays = self._grey_filled(arrays)
+                body = arrays
                 built = build_vehicle(arrays, entry, unit, tyre, rim, plate_material, lamp_material)
                 plates, lamps, arrays = built.pop("plates"), built.pop("lamps"), built
                 mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays["normals"],
@@ -140,6 +156,17 @@ class Shapes:
             shape = Shape(mesh_id, pos.min(axis=0), pos.max(axis=0), True, unit, distinct, **axes)
             shape.plates, shape.plate_material, shape.roles = plates, plate_material, roles
             shape.lamps, shape.lamp_material = lamps, lamp_material
+            if kind == "asset" and entry.get("lods"):
+                from ..scene.vehicles import body_lift
+
+                vehicle = any(k in entry for k in ("wheels", "plates", "lamps"))
+                if not vehicle:
+                    body = arrays
+                shape.lod_errors = tuple(level["error"] for level in assets.lods(value))
+                shape.lod_meshes = {0: (mesh_id, len(arrays["indices"]), mesh_bytes(arrays))}
+                shape._lod = {"asset": value, "entry": entry, "unit": unit, "body": body,
+                              "vehicle": (tyre, rim, plate_material, lamp_material,
+                                          body_lift(body, entry, unit)) if vehicle else None}
             return shape
         if kind == "primitive":
             # Unit shapes (1 m across, centred), sized per object by scaling.
@@ -149,6 +176,64 @@ class Shapes:
             return Shape(mid, np.full(3, -0.5), np.full(3, 0.5), False)
         mid, lo, hi = randomize.randomizer(kind).make_shape(scene)
         return Shape(mid, lo, hi, False)
+
+
+    def _grey_filled(self, arrays: Mapping[str, Any]) -> Dict[str, Any]:
+        """A model's arrays with the worker's grey material on triangles that have none."""
+        mids = np.asarray(arrays["material_ids"])
+        if mids.size and not (mids < 0).any():
+            return dict(arrays)
+        return dict(arrays, material_ids=np.where(mids < 0, self._grey(), mids) if mids.size else
+                    np.full(len(arrays["indices"]), self._grey(), np.int32))
+
+    def level_mesh(self, shape: Shape, level: int) -> Optional[int]:
+        """The mesh of level of detail ``level`` of a library model (0: the finest, ``shape``'s
+        own), made on first use: the level's file, each of its triangles given the material of
+        the finest level's closest triangle (so that the object's materials, their randomized
+        paint and wear, apply to every level alike), then the same wheels, plates and lamps.
+        None when the level cannot carry them (a lamp or plate mount the coarse body has lost:
+        shape.lod_unusable says why; the caller takes a finer level)."""
+        if level not in shape.lod_meshes and level not in shape.lod_unusable:
+            try:
+                shape.lod_meshes[level] = self._make_level(shape, level)
+            except ValueError as e:  # vehicles.plate_mounts / lamp_lenses: the mount is off the body
+                shape.lod_unusable[level] = str(e)
+        return shape.lod_meshes[level][0] if level in shape.lod_meshes else None
+
+    def _make_level(self, shape: Shape, level: int) -> Tuple[int, int, int]:
+        from ..scene import assets
+        from ..scene.vehicles import build_vehicle
+        from .._core import surface_distances
+
+        lod = shape._lod
+        assert lod is not None, "level_mesh: the shape has no levels of detail"
+        path = assets.lods(lod["asset"])[level]["path"]
+        scene = self.scene
+        r = scene.load_mesh_file(path)
+        arrays = scene.mesh_arrays(r["mesh_id"])
+        # The level's own mesh and materials go: its triangles take the finest level's materials.
+        scene.remove_mesh(r["mesh_id"])
+        for m in r["material_ids"]:
+            scene.remove_material(int(m))
+        for t in r.get("texture_ids", []):
+            scene.remove_texture(int(t))
+        body = lod["body"]
+        pos, tri = np.asarray(arrays["positions"], np.float32), np.asarray(arrays["indices"], np.int64)
+        centroids = pos[tri.reshape(-1, 3)].mean(axis=1)
+        _, closest = surface_distances(np.asarray(body["positions"], np.float32),
+                                       np.asarray(body["indices"], np.int64).reshape(-1, 3), centroids,
+                                       return_triangles=True)
+        arrays = dict(arrays, material_ids=np.asarray(body["material_ids"], np.int32)[closest])
+        if lod["vehicle"] is not None:
+            tyre, rim, plate_material, lamp_material, lift = lod["vehicle"]
+            arrays = build_vehicle(arrays, lod["entry"], lod["unit"], tyre, rim, plate_material, lamp_material,
+                                   lift=lift)
+            arrays.pop("plates")
+            arrays.pop("lamps")
+        mesh_id = scene.add_mesh(arrays["positions"], arrays["indices"], normals=arrays.get("normals"),
+                                 uvs=arrays.get("uvs"), material_ids=arrays["material_ids"],
+                                 name=f"{lod['asset']} lod{level}")
+        return mesh_id, len(np.asarray(arrays["indices"]).reshape(-1, 3)), mesh_bytes(arrays)
 
 
 class FrameLibrary:

@@ -179,6 +179,15 @@ RENDER_KEYS = ("spp", "max_depth", "rr_depth", "threads", "clamp_indirect", "noi
                "texture_budget_mib")
 RENDER = settings_record("render", "path_tracer", keys=RENDER_KEYS, default=EMPTY,
                          doc="path tracing settings (threads: per worker; 0 = all cores / workers)")
+# Host policy, not the path tracer's: which level of detail each library model uses.
+RENDER.fields["geometry_lod"] = Number(
+    0.5, min=0.0, max=8.0,
+    doc="library models whose entry lists levels of detail (lods) use, per frame, the coarsest whose geometric "
+        "error projects under this many pixels (0: always the finest; docs/geometry_lod.md)")
+RENDER.fields["geometry_lod_iou"] = Number(
+    0.98, min=0.0, max=1.0,
+    doc="and, for a labelled object, whose amodal mask (the object rendered alone) keeps at least this IoU with "
+        "the finest level's")
 
 
 #: A post-processing step: ``{type: NAME, ...its parameters}`` (:mod:`synthgen.post`).

@@ -5,7 +5,9 @@ Each manifest entry has ``id``, ``kind`` (mesh, hdr, texture, photo, svg, image,
 ``scale`` (factor to metres), ``description`` and ``companions`` (files that must sit next
 to the main one, e.g. an OBJ's MTL, each with ``path`` and ``sha256``); vehicles also
 ``ride_height`` and ``wheels`` (built by :mod:`synthgen.scene.vehicles` for bodies that come
-without them), and ``optional: true`` marks a large asset that tests use only when it is
+without them); ``lods`` lists coarser versions of a model (levels of detail, files of the same
+source, each with ``path``, ``sha256`` and ``error``: the largest distance between its surface
+and the main file's, in mesh units, :mod:`synthgen.scene.lod`), fetched with it; ``optional: true`` marks a large asset that tests use only when it is
 already in the cache. Sources:
 
 * ``{path: P}``: a local file (relative paths are relative to the repository root);
@@ -35,7 +37,7 @@ import yaml
 
 from .._core import SynthgenError
 
-__all__ = ["AssetError", "manifest_dir", "load_manifest", "cache_dir", "fetch", "resolve", "KINDS"]
+__all__ = ["AssetError", "manifest_dir", "load_manifest", "cache_dir", "fetch", "resolve", "lods", "KINDS"]
 
 KINDS = ("mesh", "hdr", "texture", "photo", "svg", "image", "data")
 #: Axes a model may declare as its forward and up directions (``forward: "+z"``).
@@ -82,7 +84,8 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if not isinstance(e, dict):
                 raise AssetError(f"{where}: expected a mapping")
             allowed = {"id", "kind", "licence", "sha256", "source", "class", "scale", "description", "companions",
-                       "forward", "up", "optional", "ride_height", "wheels", "plates", "lamps", "materials"}
+                       "forward", "up", "optional", "ride_height", "wheels", "plates", "lamps", "materials",
+                       "lods"}
             for k in e:
                 if k not in allowed:
                     m = difflib.get_close_matches(str(k), allowed, n=1)
@@ -110,6 +113,8 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                 _check_plates(e["plates"], f"{where} ({e['id']}): plates")
             if "lamps" in e:
                 _check_lamps(e["lamps"], f"{where} ({e['id']}): lamps")
+            if "lods" in e:
+                _check_lods(e["lods"], f"{where} ({e['id']}): lods")
             if "materials" in e:
                 from .vehicles import ROLES
 
@@ -120,6 +125,20 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
                 raise AssetError(f"{where}: duplicate id '{e['id']}'")
             out[e["id"]] = dict(e, manifest=path)
     return out
+
+
+def _check_lods(lods: Any, where: str) -> None:
+    if not isinstance(lods, list) or not lods:
+        raise AssetError(f"{where}: expected a list of {{path, sha256, error}}")
+    for i, lod in enumerate(lods):
+        w = f"{where}[{i}]"
+        if not isinstance(lod, dict) or set(lod) != {"path", "sha256", "error"}:
+            raise AssetError(f"{w}: expected exactly the keys path, sha256, error")
+        if not (isinstance(lod["sha256"], str) and len(lod["sha256"]) == 64):
+            raise AssetError(f"{w}: sha256 must be 64 hex digits")
+        err = lod["error"]
+        if isinstance(err, bool) or not isinstance(err, (int, float)) or not err > 0 or err != err:
+            raise AssetError(f"{w}: error must be a positive number (mesh units), got {err!r}")
 
 
 def _check_wheels(w: Any, where: str) -> None:
@@ -249,7 +268,7 @@ def _cached(entry: Dict[str, Any], cache: str) -> str:
 def _fetch_one(entry: Dict[str, Any], cache: str) -> str:
     dst = _cached(entry, cache)
     files = [(entry["source"].get("path"), dst, entry["sha256"])]
-    for c in entry.get("companions") or []:
+    for c in list(entry.get("companions") or []) + list(entry.get("lods") or []):
         rel = os.path.relpath(c["path"], os.path.dirname(entry["source"].get("path") or ""))
         files.append((c["path"], os.path.join(os.path.dirname(dst), rel), c["sha256"]))
     if all(os.path.isfile(d) and file_sha256(d) == s for _, d, s in files):
@@ -307,6 +326,20 @@ def resolve(asset_id: str, manifest: Optional[Dict[str, Dict[str, Any]]] = None,
             cache: Optional[str] = None) -> str:
     """The cached path of one asset, fetched first when missing."""
     return fetch([asset_id], manifest, cache)[asset_id]
+
+
+def lods(asset_id: str, manifest: Optional[Dict[str, Dict[str, Any]]] = None,
+         cache: Optional[str] = None) -> List[Dict[str, Any]]:
+    """The levels of detail of a model, finest first: ``{"path": cached file, "error": mesh
+    units}``, the main file being level 0 (error 0); fetched with the model when missing."""
+    e = entry(asset_id, manifest)
+    main = resolve(asset_id, manifest, cache)
+    base = os.path.dirname(e["source"].get("path") or "")
+    out = [{"path": main, "error": 0.0}]
+    for lod in e.get("lods") or []:
+        out.append({"path": os.path.join(os.path.dirname(main), os.path.relpath(lod["path"], base)),
+                    "error": float(lod["error"])})
+    return out
 
 
 def entry(asset_id: str, manifest: Optional[Dict[str, Dict[str, Any]]] = None) -> Dict[str, Any]:

@@ -47,7 +47,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 import numpy as np
 
 __all__ = ["AXES", "PLATE_MM", "ROLES", "LAMP_KINDS", "lamp_names", "lamp_lenses", "role_material", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
-           "build_vehicle"]
+           "body_lift", "build_vehicle"]
 
 #: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
 PLATE_MM = (520.0, 112.0)
@@ -345,9 +345,16 @@ def _lens_mesh(grid: np.ndarray, valid: np.ndarray, outward: np.ndarray
     return pos, tris, np.repeat(outward[None].astype(np.float32), len(pos), 0), uv.astype(np.float32)
 
 
+def body_lift(body: Mapping[str, Any], entry: Mapping[str, Any], unit: float) -> float:
+    """How far a vehicle body is raised (model units along its up axis): its lowest point goes
+    to the entry's ride height."""
+    up = model_axes(entry.get("forward", "+x"), entry.get("up", "+y"))[1]
+    return float(entry.get("ride_height", 0.0)) / unit - float((np.asarray(body["positions"], np.float64) @ up).min())
+
+
 def build_vehicle(body: Mapping[str, Any], entry: Mapping[str, Any], unit: float,
                   tyre_material: int, rim_material: int, plate_materials: Optional[Mapping[str, int]] = None,
-                  lamp_materials: Optional[Mapping[str, int]] = None) -> Dict[str, Any]:
+                  lamp_materials: Optional[Mapping[str, int]] = None, lift: Optional[float] = None) -> Dict[str, Any]:
     """The arrays of a vehicle mesh (positions, indices, normals, uvs or None, material_ids) in the
     model's units, and its plate mounts (``plates``: name -> 4 x 3 corners): ``body``
     (:meth:`Scene.mesh_arrays` of the imported model) lifted by the entry's ride height, its
@@ -369,8 +376,8 @@ def build_vehicle(body: Mapping[str, Any], entry: Mapping[str, Any], unit: float
         corner, src, nrm = crease_normals(pos, tri)
         pos, tri = pos[src], corner
         uvs = None if uvs is None else np.asarray(uvs)[src]
-    # The body's lowest point goes to the ride height (in model units along up).
-    lift = float(entry.get("ride_height", 0.0)) / unit - float((pos @ up).min())
+    if lift is None:
+        lift = body_lift(body, entry, unit)
     pos = pos + lift * up
     P, N, T, M, U = [pos], [nrm], [tri], [mids], [uvs]
     base = len(pos)
