@@ -48,11 +48,13 @@ struct TextureResolution {
   int texture_level = 0;    ///< the same for this texture's own lookups (its uv transform)
   float min_rho = 0.f;      ///< smallest footprint of a lookup in level-0 texels (inf unseen)
   uint64_t bytes_full = 0;  ///< the pyramid's texel memory, every level
-  uint64_t bytes_needed = 0;  ///< levels needed_level and coarser
+  uint64_t bytes_needed = 0;  ///< levels needed_level (its needed tiles) and coarser
+  int tiles = 0;              ///< tiles of level needed_level (MipMap::k_tile texels on a side)
+  int needed_tiles = 0;       ///< of those, the ones a lookup falls in (the others stay on disk)
   int first_resident = 0;     ///< the pyramid's finest level in memory now
   int first_used = 0;         ///< the pyramid's finest level lookups read now
   int tail_level = 0;         ///< the finest level that always stays resident
-  uint64_t bytes_resident = 0;  ///< the pyramid's texel memory now
+  uint64_t bytes_resident = 0;  ///< the pyramid's texel memory now (levels and tiles in memory)
 };
 
 /// What a file import produced.

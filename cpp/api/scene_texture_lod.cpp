@@ -36,22 +36,26 @@ std::vector<TextureResolution> Scene::estimate_texture_resolution(const TextureE
     r.alpha = mip->alpha() != nullptr;
     r.min_rho = k_inf;
     auto m = est.recorded.by_mip.find(mip);
+    std::vector<uint8_t> tiles;
     if (m != est.recorded.by_mip.end() && m->second.lookups > 0) {
       r.seen = true;
       r.lookups = m->second.lookups;
       r.needed_level = m->second.needed_level();
       r.min_rho = m->second.min_rho.empty() ? k_inf : m->second.min_rho[0];
+      tiles = m->second.tiles(*mip, r.needed_level);
     }
+    r.tiles = mip->tiles_x(r.needed_level) * mip->tiles_y(r.needed_level);
+    r.needed_tiles = r.seen ? int(std::count(tiles.begin(), tiles.end(), uint8_t(1))) : r.tiles;
     auto t = est.recorded.by_texture.find(&tex);
     if (t != est.recorded.by_texture.end()) r.texture_level = t->second.needed_level();
     r.needed_width = mip->width(r.needed_level);
     r.needed_height = mip->height(r.needed_level);
     r.bytes_full = mip->bytes(0);
-    r.bytes_needed = mip->bytes(r.needed_level);
+    r.bytes_needed = r.needed_level < mip->tail_level() ? mip->bytes(r.needed_level, tiles) : mip->bytes(r.needed_level);
     r.first_resident = mip->first_resident();
     r.first_used = mip->first_used();
     r.tail_level = mip->tail_level();
-    r.bytes_resident = mip->bytes(mip->first_resident());
+    r.bytes_resident = mip->resident_bytes();
     out.push_back(std::move(r));
   }
   if (raw) *raw = std::move(est);
@@ -84,7 +88,7 @@ void Scene::texture_memory(uint64_t* full, uint64_t* resident) const {
     if (e && e->object)
       if (const MipMap* mip = e->object->mipmap(); mip && seen.insert(mip).second) {
         *full += mip->bytes(0);
-        *resident += mip->bytes(mip->first_resident());
+        *resident += mip->resident_bytes();
       }
 }
 
@@ -92,11 +96,13 @@ void Scene::apply_texture_lod(const RenderSettings& settings, RenderStats* stats
   auto t0 = std::chrono::steady_clock::now();
   TextureEstimateSettings es;
   es.threads = settings.threads;
-  std::vector<TextureResolution> res = estimate_texture_resolution(es);
+  TextureEstimate est;
+  std::vector<TextureResolution> res = estimate_texture_resolution(es, &est);
   const uint64_t now = ++m_texture_lod_count;
-  // Lookups read the estimate's level (the margin finer) of a seen pyramid and the tail of an
-  // unseen one, whatever is in memory: the image depends on this frame alone, never on what
-  // a worker rendered before (determinism across worker counts).
+  // Lookups read the estimate's level (the margin finer) of a seen pyramid, in the tiles its
+  // lookups fell in, and the tail of an unseen one, whatever is in memory: the image depends
+  // on this frame alone, never on what a worker rendered before (determinism across worker
+  // counts).
   std::map<const MipMap*, int> level;
   for (const TextureResolution& r : res) {
     const MipMap* mip = m_textures[r.texture_id]->object->mipmap();
@@ -104,7 +110,11 @@ void Scene::apply_texture_lod(const RenderSettings& settings, RenderStats* stats
     if (r.seen) it->second = std::min(it->second, std::max(0, r.needed_level - int(settings.texture_lod_margin)));
     if (r.seen) m_pyramid_last_seen[mip] = now;
   }
-  for (const auto& [mip, l] : level) mip->use_levels(l);
+  for (const auto& [mip, l] : level) {
+    auto m = est.recorded.by_mip.find(mip);
+    if (m != est.recorded.by_mip.end() && m->second.lookups > 0) mip->use_tiles(l, m->second.tiles(*mip, l));
+    else mip->use_levels(l);
+  }
   // Forget pyramids no texture holds any more (their addresses may be reused).
   for (auto it = m_pyramid_last_seen.begin(); it != m_pyramid_last_seen.end();)
     it = level.count(it->first) ? std::next(it) : m_pyramid_last_seen.erase(it);
@@ -122,9 +132,9 @@ void Scene::apply_texture_lod(const RenderSettings& settings, RenderStats* stats
   const double budget = double(settings.texture_budget_mib) * 1024.0 * 1024.0;
   for (const auto& [last, mip] : order) {
     if (double(resident) <= budget) break;
-    uint64_t before = mip->bytes(mip->first_resident());
+    uint64_t before = mip->resident_bytes();
     mip->drop_unused();
-    resident -= before - mip->bytes(mip->first_resident());
+    resident -= before - mip->resident_bytes();
   }
   stats->texture_lod_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }

@@ -632,6 +632,8 @@ a BVH build). render() commits pending edits first.)doc")
                d["min_rho"] = r.min_rho;
                d["bytes_full"] = r.bytes_full;
                d["bytes_needed"] = r.bytes_needed;
+               d["tiles"] = r.tiles;
+               d["needed_tiles"] = r.needed_tiles;
                d["first_resident"] = r.first_resident;
                d["first_used"] = r.first_used;
                d["tail_level"] = r.tail_level;

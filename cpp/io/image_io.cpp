@@ -322,7 +322,66 @@ bool load_mip(const char* path, int first, int count, int chbegin, int chend, sg
   }
 }
 
-const sg::ImageIoApi k_api = {sg::k_image_io_api_version, &load, &load_memory, &save, &save_mip, &load_mip};
+bool load_mip_rects(const char* path, int level, const sg::TexelRect* rects, int count, int chbegin, int chend,
+                    std::vector<std::vector<float>>* out, std::string* error) {
+  try {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+      *error = "cannot open (" + OIIO::geterror() + ")";
+      return false;
+    }
+    if (in->spec().get_int_attribute(k_mip_tag, 0) != 1) {
+      *error = "not a synthgen mip file";
+      return false;
+    }
+    if (!in->seek_subimage(0, level)) {
+      *error = "no mip level " + std::to_string(level);
+      return false;
+    }
+    const OIIO::ImageSpec& spec = in->spec();
+    if (chbegin < 0 || chbegin >= chend || chend > spec.nchannels) {
+      *error = "no channels " + std::to_string(chbegin) + " to " + std::to_string(chend);
+      return false;
+    }
+    out->clear();
+    for (int i = 0; i < count; ++i) {
+      const sg::TexelRect& r = rects[i];
+      if (r.x0 < 0 || r.y0 < 0 || r.x1 > spec.width || r.y1 > spec.height || r.x0 >= r.x1 || r.y0 >= r.y1) {
+        *error = "texel rectangle outside mip level " + std::to_string(level);
+        return false;
+      }
+      std::vector<float> px(size_t(r.x1 - r.x0) * size_t(r.y1 - r.y0) * size_t(chend - chbegin));
+      // NOTE: on tile boundaries (and the image's edges) read_tiles decodes exactly the tiles
+      // of the rectangle (OpenImageIO ImageInput::read_tiles); anything else goes through
+      // read_image's region form.
+      const bool aligned = spec.tile_width > 0 && r.x0 % spec.tile_width == 0 && r.y0 % spec.tile_height == 0 &&
+                           (r.x1 % spec.tile_width == 0 || r.x1 == spec.width) &&
+                           (r.y1 % spec.tile_height == 0 || r.y1 == spec.height);
+      bool ok = aligned ? in->read_tiles(0, level, r.x0, r.x1, r.y0, r.y1, 0, 1, chbegin, chend,
+                                         OIIO::TypeDesc::FLOAT, px.data())
+                        : false;
+      if (!aligned) {
+        *error = "texel rectangle not on the file's tiles";
+        return false;
+      }
+      if (!ok) {
+        *error = "cannot read tiles of mip level " + std::to_string(level) + " (" + in->geterror() + ")";
+        return false;
+      }
+      out->push_back(std::move(px));
+    }
+    return true;
+  } catch (const std::bad_alloc&) {
+    *error = "out of memory while reading the file";
+    return false;
+  } catch (const std::exception& e) {
+    *error = e.what();
+    return false;
+  }
+}
+
+const sg::ImageIoApi k_api = {sg::k_image_io_api_version, &load, &load_memory, &save, &save_mip, &load_mip,
+                              &load_mip_rects};
 
 }  // namespace
 

@@ -79,6 +79,17 @@ struct MipFileHeader {
 MipFileHeader load_mip_file(const std::string& path, int first, int count, std::vector<ImageData>* levels,
                             int chbegin = 0, int chend = -1);
 
+/// A rectangle [x0, x1) x [y0, y1) of texels.
+struct TexelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+/// Reads channels [chbegin, chend) of rectangles `rects` of mip level `level` of a file written
+/// by save_mip_file, one float vector per rectangle (row-major over the rectangle): with
+/// rectangles on its 64 x 64 tiles only those tiles are decoded. Throws sg::FileError naming
+/// the file.
+std::vector<std::vector<float>> load_mip_rects(const std::string& path, int level, const std::vector<TexelRect>& rects,
+                                               int chbegin, int chend);
+
 /// Loads the OpenImageIO plugin now instead of at the first image read or write (a
 /// one-time cost of about 0.2 s: OpenImageIO and its format libraries). Throws sg::Error
 /// when the plugin cannot be loaded.
@@ -94,8 +105,10 @@ struct ImageIoApi {
                    std::string* error);
   bool (*load_mip)(const char* path, int first, int count, int chbegin, int chend, MipFileHeader* header,
                    std::vector<ImageData>* levels, std::string* error);
+  bool (*load_mip_rects)(const char* path, int level, const TexelRect* rects, int count, int chbegin, int chend,
+                         std::vector<std::vector<float>>* out, std::string* error);
 };
-constexpr int k_image_io_api_version = 3;
+constexpr int k_image_io_api_version = 4;
 
 }  // namespace sg
 

@@ -164,4 +164,13 @@ MipFileHeader load_mip_file(const std::string& path, int first, int count, std::
   return h;
 }
 
+std::vector<std::vector<float>> load_mip_rects(const std::string& path, int level, const std::vector<TexelRect>& rects,
+                                               int chbegin, int chend) {
+  std::vector<std::vector<float>> out;
+  std::string err;
+  if (!api().load_mip_rects(path.c_str(), level, rects.data(), int(rects.size()), chbegin, chend, &out, &err))
+    throw FileError(path, err);
+  return out;
+}
+
 }  // namespace sg

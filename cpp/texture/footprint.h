@@ -30,6 +30,7 @@ namespace sg {
 
 class MipMap;
 class Texture;
+enum class WrapMode;
 
 class FootprintRecorder {
  public:
@@ -37,15 +38,26 @@ class FootprintRecorder {
   struct Use {
     std::vector<float> min_rho;  ///< per level: the smallest rho_L of any lookup
     uint64_t lookups = 0;
+    /// Where the lookups fell (pyramids only): per level k, a flag per tile of level k
+    /// (MipMap::tiles_x(k) x tiles_y(k), row-major; empty: no lookup), set for every tile
+    /// within the footprint plus two texels of a lookup that reads level k (k = floor(lambda
+    /// - 1/2): half a level finer than the estimate's footprint, as the render's cones differ
+    /// a little), wrapped as the texture wraps.
+    std::vector<std::vector<uint8_t>> cells;
+    /// The tiles of `level` of `mip` the lookups of that level and finer ones fall in
+    /// (MipMap::use_tiles' flags): coarser lookups read coarser levels only.
+    std::vector<uint8_t> tiles(const MipMap& mip, int level) const;
     /// The coarsest level whose min_rho is >= 1 (0 when even level 0 is magnified).
     int needed_level() const;
   };
 
-  /// A lookup of `texture` (null: a pyramid looked up directly) in `mip` with footprint
-  /// vectors `a`, `b` in image units. All-zero vectors (a point lookup: alpha cut-outs, or
-  /// a lookup made without a footprint) stand for the hit's own footprint: `hit_a`, `hit_b`
-  /// mapped by the texture's uv transform `m` (row-major 2 x 2, image units per uv unit).
-  void record(const Texture* texture, const MipMap& mip, Vec2f a, Vec2f b, const float m[4]);
+  /// A lookup of `texture` (null: a pyramid looked up directly) in `mip` at image coordinates
+  /// `st` (s right, t down, before wrapping by `wrap`) with footprint vectors `a`, `b` in image
+  /// units. All-zero vectors (a point lookup: alpha cut-outs, or a lookup made without a
+  /// footprint) stand for the hit's own footprint: `hit_a`, `hit_b` mapped by the texture's
+  /// uv transform `m` (row-major 2 x 2, image units per uv unit).
+  void record(const Texture* texture, const MipMap& mip, Vec2f a, Vec2f b, const float m[4], Vec2f st,
+              WrapMode wrap);
 
   /// Adds another recorder's lookups (per-thread recorders are merged once at the end:
   /// minima, so the order does not matter).

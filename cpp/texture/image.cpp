@@ -50,7 +50,7 @@ class ImageTexture final : public Texture {
       p = Vec2f(m_m00 * uv.x + m_m01 * uv.y + m_offset.x, m_m10 * uv.x + m_m11 * uv.y + m_offset.y);
       w *= m_footprint_scale;
     }
-    record(Vec2f(w, 0.f), Vec2f(0.f, w));
+    record(p, Vec2f(w, 0.f), Vec2f(0.f, w));
     // NOTE: texture space has v pointing up (glTF/OBJ convention); image rows go down.
     return m_mip->lookup(p.x, 1.f - p.y, w, m_wrap) * m_scale;
   }
@@ -62,7 +62,7 @@ class ImageTexture final : public Texture {
       a = Vec2f(m_m00 * axis_a.x + m_m01 * axis_a.y, m_m10 * axis_a.x + m_m11 * axis_a.y);
       b = Vec2f(m_m00 * axis_b.x + m_m01 * axis_b.y, m_m10 * axis_b.x + m_m11 * axis_b.y);
     }
-    record(a, b);
+    record(p, a, b);
     // Image t = 1 - v: axis vectors flip their v component.
     return m_mip->lookup_ellipse(p.x, 1.f - p.y, Vec2f(a.x, -a.y), Vec2f(b.x, -b.y), m_wrap) * m_scale;
   }
@@ -78,18 +78,19 @@ class ImageTexture final : public Texture {
       p = Vec2f(m_m00 * uv.x + m_m01 * uv.y + m_offset.x, m_m10 * uv.x + m_m11 * uv.y + m_offset.y);
       w *= m_footprint_scale;
     }
-    record(Vec2f(w, 0.f), Vec2f(0.f, w));
+    record(p, Vec2f(w, 0.f), Vec2f(0.f, w));
     return a->lookup(p.x, 1.f - p.y, w, m_wrap).x;
   }
   const MipMap* mipmap() const override { return m_mip.get(); }
 
  private:
-  /// Reports a lookup with footprint vectors `a`, `b` (image units; zero: a point lookup) to
-  /// the texture resolution estimate while one records (texture/footprint.h).
-  void record(const Vec2f& a, const Vec2f& b) const {
+  /// Reports a lookup at `p` (uv after the transform) with footprint vectors `a`, `b` (image
+  /// units; zero: a point lookup) to the texture resolution estimate while one records
+  /// (texture/footprint.h).
+  void record(const Vec2f& p, const Vec2f& a, const Vec2f& b) const {
     if (FootprintRecorder* r = active_footprint_recorder()) {
       const float m[4] = {m_m00, m_m01, m_m10, m_m11};
-      r->record(this, *m_mip, a, b, m);
+      r->record(this, *m_mip, a, b, m, Vec2f(p.x, 1.f - p.y), m_wrap);
     }
   }
 

@@ -62,6 +62,13 @@ MipSource file_source(const std::string& cache_file, int nc) {
   };
 }
 
+/// Tiles of colour levels read back from a mip cache file (only those tiles decode).
+MipTileSource file_tile_source(const std::string& cache_file, int nc) {
+  return [cache_file, nc](int level, const std::vector<TexelRect>& rects) {
+    return load_mip_rects(cache_file, level, rects, 0, nc);
+  };
+}
+
 }  // namespace
 
 std::string ImageCache::add_memory(std::shared_ptr<const ImageData> pixels, bool integer_source) {
@@ -142,8 +149,10 @@ std::shared_ptr<const MipMap> ImageCache::get(const std::string& path, ColorSpac
           load_mip_file(cache_file, 0, 1, &a, nc, nc + 1);
           alpha = std::make_shared<const MipMap>(a.at(0));
         }
-        mip = std::make_shared<const MipMap>(h.widths, h.heights, nc, avg, file_source(cache_file, nc),
+        auto lazy = std::make_shared<MipMap>(h.widths, h.heights, nc, avg, file_source(cache_file, nc),
                                              std::move(alpha));
+        lazy->set_tile_source(file_tile_source(cache_file, nc));
+        mip = std::move(lazy);
         ++m_mip_opened;
       }
     } catch (const Error&) {
@@ -224,6 +233,7 @@ std::shared_ptr<const MipMap> ImageCache::decoded_pyramid(const ImageData& image
   }
   ++m_mip_written;
   whole->set_source(file_source(cache_file, nc));  // its levels can now be dropped and read back
+  whole->set_tile_source(file_tile_source(cache_file, nc));
   return whole;
 }
 

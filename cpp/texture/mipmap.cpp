@@ -154,27 +154,135 @@ void MipMap::set_tail() {
   while (m_tail > 0 && std::max(width(m_tail - 1), height(m_tail - 1)) <= k_tail_texels) --m_tail;
 }
 
+void MipMap::make_whole(int first) const {
+  for (int l = first; l < levels(); ++l) {
+    m_levels[size_t(l)].used.clear();
+    if (!m_levels[size_t(l)].data.empty()) continue;
+    int end = l;  // a run of levels without whole data: read back together
+    while (end < levels() && m_levels[size_t(end)].data.empty()) ++end;
+    if (!m_source) throw Error("image texture: mip level " + std::to_string(l) + " is not resident and has no source");
+    std::vector<std::vector<float>> data = m_source(l, end - l);
+    if (int(data.size()) != end - l) throw Error("image texture: the pyramid's source returned too few levels");
+    for (int k = l; k < end; ++k) {
+      std::vector<float>& d = data[size_t(k - l)];
+      if (d.size() != size_t(width(k)) * height(k) * m_channels)
+        throw Error("image texture: mip level " + std::to_string(k) + " read back with the wrong size");
+      m_levels[size_t(k)].data = std::move(d);
+      std::vector<std::vector<float>>().swap(m_levels[size_t(k)].tiles);
+      m_levels[size_t(k)].used.clear();
+    }
+    l = end - 1;
+  }
+  m_resident = std::min(m_resident, first);
+}
+
 void MipMap::use_levels(int first) const {
   first = std::min(std::max(first, 0), m_tail);
-  if (first < m_resident) {
-    std::vector<std::vector<float>> data = m_source(first, m_resident - first);
-    if (int(data.size()) != m_resident - first)
-      throw Error("image texture: the pyramid's source returned too few levels");
-    for (int l = first; l < m_resident; ++l) {
-      std::vector<float>& d = data[size_t(l - first)];
-      if (d.size() != size_t(width(l)) * height(l) * m_channels)
-        throw Error("image texture: mip level " + std::to_string(l) + " read back with the wrong size");
-      m_levels[size_t(l)].data = std::move(d);
-    }
-    m_resident = first;
-  }
+  make_whole(first);
   m_first = first;
+}
+
+void MipMap::use_tiles(int first, const std::vector<uint8_t>& used) const {
+  first = std::min(std::max(first, 0), m_tail);
+  const size_t n = size_t(tiles_x(first)) * size_t(tiles_y(first));
+  if (!used.empty() && used.size() != n)
+    throw Error("image texture: " + std::to_string(used.size()) + " tile flags for mip level " + std::to_string(first) +
+                " of " + std::to_string(n) + " tiles");
+  if (used.empty() || first >= m_tail || std::all_of(used.begin(), used.end(), [](uint8_t u) { return u != 0; })) {
+    use_levels(first);
+    return;
+  }
+  make_whole(first + 1);
+  Level& lv = m_levels[size_t(first)];
+  if (lv.data.empty()) {
+    if (lv.tiles.size() != n) lv.tiles.assign(n, {});
+    const int tx = tiles_x(first);
+    auto rect = [&](size_t t) {
+      TexelRect r;
+      r.x0 = int(t % size_t(tx)) * k_tile;
+      r.y0 = int(t / size_t(tx)) * k_tile;
+      r.x1 = std::min(lv.width, r.x0 + k_tile);
+      r.y1 = std::min(lv.height, r.y0 + k_tile);
+      return r;
+    };
+    std::vector<size_t> missing;
+    for (size_t t = 0; t < n; ++t)
+      if (used[t] && lv.tiles[t].empty()) missing.push_back(t);
+    std::vector<std::vector<float>> read;  // the missing tiles from the tile source, in one pass
+    if (m_tile_source && !missing.empty()) {
+      std::vector<TexelRect> rects;
+      for (size_t t : missing) rects.push_back(rect(t));
+      read = m_tile_source(first, rects);
+      if (read.size() != missing.size()) throw Error("image texture: the tile source returned too few tiles");
+    }
+    std::vector<float> whole;  // the level, when tiles are cut from it (no tile source)
+    for (size_t k = 0; k < missing.size(); ++k) {
+      const size_t t = missing[k];
+      const TexelRect r = rect(t);
+      const int x0 = r.x0, y0 = r.y0, x1 = r.x1, y1 = r.y1;
+      const size_t texels = size_t(x1 - x0) * size_t(y1 - y0) * m_channels;
+      if (m_tile_source) {
+        lv.tiles[t] = std::move(read[k]);
+      } else {
+        if (whole.empty()) {
+          if (!m_source) throw Error("image texture: mip level " + std::to_string(first) + " has no source");
+          std::vector<std::vector<float>> d = m_source(first, 1);
+          if (d.size() != 1 || d[0].size() != size_t(lv.width) * lv.height * m_channels)
+            throw Error("image texture: mip level " + std::to_string(first) + " read back with the wrong size");
+          whole = std::move(d[0]);
+        }
+        std::vector<float>& tile = lv.tiles[t];
+        tile.reserve(texels);
+        for (int y = y0; y < y1; ++y)
+          tile.insert(tile.end(), whole.begin() + (size_t(y) * lv.width + x0) * m_channels,
+                      whole.begin() + (size_t(y) * lv.width + x1) * m_channels);
+      }
+      if (lv.tiles[t].size() != texels)
+        throw Error("image texture: a tile of mip level " + std::to_string(first) + " read back with the wrong size");
+    }
+  }
+  lv.used = used;
+  m_first = first;
+  m_resident = std::min(m_resident, first);
+}
+
+int MipMap::used_tiles() const {
+  if (m_first >= levels()) return 0;
+  const std::vector<uint8_t>& u = m_levels[size_t(m_first)].used;
+  return int(std::count_if(u.begin(), u.end(), [](uint8_t x) { return x != 0; }));
+}
+
+int MipMap::resident_tiles() const {
+  if (m_first >= levels()) return 0;
+  const auto& tiles = m_levels[size_t(m_first)].tiles;
+  return int(std::count_if(tiles.begin(), tiles.end(), [](const std::vector<float>& t) { return !t.empty(); }));
 }
 
 void MipMap::drop_unused() const {
   if (!m_source) return;
-  for (int l = m_resident; l < m_first; ++l) std::vector<float>().swap(m_levels[size_t(l)].data);
+  for (int l = m_resident; l < std::min(m_first, levels()); ++l) {
+    std::vector<float>().swap(m_levels[size_t(l)].data);
+    std::vector<std::vector<float>>().swap(m_levels[size_t(l)].tiles);
+  }
   m_resident = std::max(m_resident, m_first);
+  if (m_first >= levels()) return;
+  Level& f = m_levels[size_t(m_first)];
+  if (f.used.empty()) return;
+  const int tx = tiles_x(m_first);
+  if (!f.data.empty()) {  // whole, read in part: keep the used tiles only
+    f.tiles.assign(f.used.size(), {});
+    for (size_t t = 0; t < f.used.size(); ++t) {
+      if (!f.used[t]) continue;
+      const int x0 = int(t % size_t(tx)) * k_tile, y0 = int(t / size_t(tx)) * k_tile;
+      const int x1 = std::min(f.width, x0 + k_tile), y1 = std::min(f.height, y0 + k_tile);
+      for (int y = y0; y < y1; ++y)
+        f.tiles[t].insert(f.tiles[t].end(), f.data.begin() + (size_t(y) * f.width + x0) * m_channels,
+                          f.data.begin() + (size_t(y) * f.width + x1) * m_channels);
+    }
+    std::vector<float>().swap(f.data);
+  }
+  for (size_t t = 0; t < f.used.size() && t < f.tiles.size(); ++t)
+    if (!f.used[t]) std::vector<float>().swap(f.tiles[t]);
 }
 
 void MipMap::make_resident(int first) const {
@@ -182,30 +290,57 @@ void MipMap::make_resident(int first) const {
   drop_unused();
 }
 
+const float* MipMap::texel_ptr(const Level& l, size_t x, size_t y) const {
+  if (l.used.empty()) return &l.data[(y * size_t(l.width) + x) * m_channels];
+  const size_t tx = x / k_tile, ty = y / k_tile, t = ty * ((size_t(l.width) + k_tile - 1) / k_tile) + tx;
+  if (!l.used[t]) return nullptr;
+  if (!l.data.empty()) return &l.data[(y * size_t(l.width) + x) * m_channels];
+  const size_t tw = std::min(size_t(k_tile), size_t(l.width) - tx * k_tile);
+  return &l.tiles[t][((y - ty * k_tile) * tw + (x - tx * k_tile)) * m_channels];
+}
+
 Color MipMap::texel(int level, int x, int y, WrapMode wrap) const {
-  const Level& l = m_levels[size_t(std::max(level, m_first))];
-  size_t i = size_t(wrap_index(y, l.height, wrap)) * l.width + size_t(wrap_index(x, l.width, wrap));
-  if (m_channels == 1) return Color(l.data[i]);
-  const float* p = &l.data[3 * i];
+  level = std::max(level, m_first);
+  const Level& l = m_levels[size_t(level)];
+  const size_t xi = size_t(wrap_index(x, l.width, wrap)), yi = size_t(wrap_index(y, l.height, wrap));
+  const float* p = texel_ptr(l, xi, yi);
+  if (!p) {  // a tile the frame does not use: the texel of the next coarser level over it
+    const Level& c = m_levels[size_t(level + 1)];
+    return texel(level + 1, std::min(int(xi) * c.width / l.width, c.width - 1),
+                 std::min(int(yi) * c.height / l.height, c.height - 1), wrap);
+  }
+  if (m_channels == 1) return Color(p[0]);
   return Color(p[0], p[1], p[2]);
 }
 
 Color MipMap::bilinear(int level, float s, float t, WrapMode wrap) const {
-  const Level& l = m_levels[size_t(std::max(level, m_first))];
+  level = std::max(level, m_first);
+  const Level& l = m_levels[size_t(level)];
   float x = reduce_coordinate(s, wrap) * float(l.width) - 0.5f;
   float y = reduce_coordinate(t, wrap) * float(l.height) - 0.5f;
   float fx = std::floor(x), fy = std::floor(y);
   float ax = x - fx, ay = y - fy;
   int x0 = int(fx), y0 = int(fy);
   size_t xa = size_t(wrap_index(x0, l.width, wrap)), xb = size_t(wrap_index(x0 + 1, l.width, wrap));
-  size_t ya = size_t(wrap_index(y0, l.height, wrap)) * l.width, yb = size_t(wrap_index(y0 + 1, l.height, wrap)) * l.width;
+  size_t ya = size_t(wrap_index(y0, l.height, wrap)), yb = size_t(wrap_index(y0 + 1, l.height, wrap));
   const float w00 = (1.f - ax) * (1.f - ay), w10 = ax * (1.f - ay), w01 = (1.f - ax) * ay, w11 = ax * ay;
-  if (m_channels == 1) {
+  const float *p00, *p10, *p01, *p11;
+  if (l.used.empty()) {  // the common case: a whole level
     const float* d = l.data.data();
-    return Color(w00 * d[ya + xa] + w10 * d[ya + xb] + w01 * d[yb + xa] + w11 * d[yb + xb]);
+    const size_t nc = size_t(m_channels), ra = ya * size_t(l.width), rb = yb * size_t(l.width);
+    p00 = d + nc * (ra + xa);
+    p10 = d + nc * (ra + xb);
+    p01 = d + nc * (rb + xa);
+    p11 = d + nc * (rb + xb);
+  } else {
+    p00 = texel_ptr(l, xa, ya);
+    p10 = texel_ptr(l, xb, ya);
+    p01 = texel_ptr(l, xa, yb);
+    p11 = texel_ptr(l, xb, yb);
+    // A texel in a tile the frame does not use: the lookup reads the next coarser level.
+    if (!p00 || !p10 || !p01 || !p11) return bilinear(level + 1, s, t, wrap);
   }
-  const float *p00 = &l.data[3 * (ya + xa)], *p10 = &l.data[3 * (ya + xb)], *p01 = &l.data[3 * (yb + xa)],
-              *p11 = &l.data[3 * (yb + xb)];
+  if (m_channels == 1) return Color(w00 * *p00 + w10 * *p10 + w01 * *p01 + w11 * *p11);
   return Color(w00 * p00[0] + w10 * p10[0] + w01 * p01[0] + w11 * p11[0],
                w00 * p00[1] + w10 * p10[1] + w01 * p01[1] + w11 * p11[1],
                w00 * p00[2] + w10 * p10[2] + w01 * p01[2] + w11 * p11[2]);
@@ -276,6 +411,28 @@ uint64_t MipMap::bytes(int first_level) const {
   for (int l = std::max(first_level, 0); l < levels(); ++l)
     n += uint64_t(m_levels[size_t(l)].width) * uint64_t(m_levels[size_t(l)].height) * uint64_t(m_channels) * sizeof(float);
   return n + (m_alpha ? m_alpha->bytes(0) : 0);
+}
+
+uint64_t MipMap::bytes(int level, const std::vector<uint8_t>& used) const {
+  if (used.empty() || level >= levels()) return bytes(level);
+  uint64_t n = bytes(level + 1);
+  const int tx = tiles_x(level);
+  for (size_t t = 0; t < used.size(); ++t) {
+    if (!used[t]) continue;
+    const int x0 = int(t % size_t(tx)) * k_tile, y0 = int(t / size_t(tx)) * k_tile;
+    n += uint64_t(std::min(width(level), x0 + k_tile) - x0) * uint64_t(std::min(height(level), y0 + k_tile) - y0) *
+         uint64_t(m_channels) * sizeof(float);
+  }
+  return n;
+}
+
+uint64_t MipMap::resident_bytes() const {
+  uint64_t n = 0;
+  for (const Level& l : m_levels) {
+    n += l.data.size() * sizeof(float);
+    for (const auto& t : l.tiles) n += t.size() * sizeof(float);
+  }
+  return n + (m_alpha ? m_alpha->resident_bytes() : 0);
 }
 
 }  // namespace sg

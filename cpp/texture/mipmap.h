@@ -38,6 +38,10 @@ WrapMode parse_wrap_mode(const std::string& s, const std::string& context);
 /// returns the texel data (MipMap::channels() values per texel, row-major) of levels
 /// [first, first + count). Throws sg::Error (sg::FileError for files) when it cannot.
 using MipSource = std::function<std::vector<std::vector<float>>(int first, int count)>;
+/// Where single tiles of a level come back from: the texels of each rectangle of `level`
+/// (MipMap::channels() values per texel, row-major over the rectangle). Optional: without
+/// one, tiles are cut from their whole level (MipSource).
+using MipTileSource = std::function<std::vector<std::vector<float>>(int level, const std::vector<TexelRect>& rects)>;
 
 class MipMap {
  public:
@@ -80,6 +84,10 @@ class MipMap {
   /// pyramid (cut-outs stay exact: they decide the labels): the memory the pyramid holds
   /// with those levels resident.
   uint64_t bytes(int first_level = 0) const;
+  /// The same with level `level` resident in the tiles flagged in `used` only (empty: whole).
+  uint64_t bytes(int level, const std::vector<uint8_t>& used) const;
+  /// Bytes of the texels in memory now (whole levels and tiles, the alpha pyramid included).
+  uint64_t resident_bytes() const;
 
   // Residency (docs/texture_lod.md). Lookups read levels first_used() and coarser only: a
   // footprint that asks for a finer one reads that level (bilinear there). Levels from
@@ -95,6 +103,24 @@ class MipMap {
   /// Gives a pyramid built from pixels the source its dropped levels come back from (without
   /// one, levels are never dropped).
   void set_source(MipSource source) { m_source = std::move(source); }
+  /// Gives the pyramid a reader of single tiles (a tiled file: only the tiles read decode).
+  void set_tile_source(MipTileSource source) { m_tile_source = std::move(source); }
+
+  // Tiles (docs/texture_lod.md): the finest level lookups read may be resident in part, in
+  // tiles of k_tile x k_tile texels; lookups whose texels fall in a tile the frame does not
+  // use read the next coarser level instead (whole), so a frame's images depend on its own
+  // tiles only, never on what an earlier frame left resident.
+  static constexpr int k_tile = 64;
+  int tiles_x(int level) const { return (width(level) + k_tile - 1) / k_tile; }
+  int tiles_y(int level) const { return (height(level) + k_tile - 1) / k_tile; }
+  /// use_levels(first), with level `first` read only in the tiles flagged in `used`
+  /// (tiles_x * tiles_y flags, row-major; empty: every tile); the tiles are read from the
+  /// tile source (or cut from the level) when not resident. `first` at or past the tail
+  /// level uses every tile.
+  void use_tiles(int first, const std::vector<uint8_t>& used) const;
+  /// Tiles of first_used() the frame reads (0 when it reads the whole level), and resident.
+  int used_tiles() const;
+  int resident_tiles() const;
   /// Lookups read colour levels `first` (clamped to [0, tail_level()]) and coarser: they are
   /// read from the source when not resident; finer resident levels stay (drop_unused frees
   /// them). NOTE: none of the residency calls is safe while lookups run: Scene calls them
@@ -102,10 +128,12 @@ class MipMap {
   void use_levels(int first) const;
   /// use_levels(first), then frees the levels finer than it (only with a source).
   void make_resident(int first) const;
-  /// Frees the resident levels finer than first_used() (only with a source).
+  /// Frees the resident levels finer than first_used() and the tiles of first_used() the
+  /// frame does not use (only with a source).
   void drop_unused() const;
 
-  /// The texels of a level (empty when it is not resident); for sources and tests.
+  /// The texels of a level (empty when it is not resident or resident in tiles only); for
+  /// sources and tests.
   const std::vector<float>& level_data(int level) const { return m_levels[size_t(level)].data; }
 
   /// Pyramid of the alpha channel (one channel), null when the image has none.
@@ -115,14 +143,25 @@ class MipMap {
   struct Level {
     int width = 0, height = 0;
     std::vector<float> data;  ///< row-major, m_channels floats per texel (empty: not resident)
+    /// Resident in tiles (data empty): tiles_x * tiles_y row-major tiles, each its texels
+    /// row-major over the tile's own width (k_tile, less at the right and bottom edges).
+    std::vector<std::vector<float>> tiles;
+    /// Of the first used level: the tiles lookups read (empty: all).
+    std::vector<uint8_t> used;
   };
   void set_tail();
+  /// Levels [first, levels()) resident and whole (read back, tiled ones completed).
+  void make_whole(int first) const;
+  /// Pointer to texel (x, y) (in range) of level `level`, or null when a lookup must not read
+  /// it (a tile the frame does not use).
+  const float* texel_ptr(const Level& l, size_t x, size_t y) const;
   // NOTE: mutable: residency changes between renders (make_resident), never during one.
   mutable std::vector<Level> m_levels;
   int m_channels = 3;
   Color m_average{0.f};
   std::shared_ptr<const MipMap> m_alpha;
   MipSource m_source;
+  MipTileSource m_tile_source;
   int m_tail = 0;
   mutable int m_first = 0, m_resident = 0;
 };

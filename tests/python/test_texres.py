@@ -73,7 +73,7 @@ def test_cli_prints_the_table_for_a_scene_file(tmp_path, capsys):
     out = capsys.readouterr().out
     print(out)
     row = next(line for line in out.splitlines() if line.startswith("checker.png"))
-    assert row.split()[1:] == ["0,1", "512x512", "10", "yes", row.split()[5], "1", "256x256", "4.00", "1.00"]
+    assert row.split()[1:] == ["0,1", "512x512", "10", "yes", row.split()[5], "1", "256x256", "16/16", "4.00", "1.00"]
     assert "1 pyramids: 4.00 MiB at full resolution, 1.00 MiB needed (ratio 4.00)" in out
 
 

@@ -28,9 +28,10 @@ def write_png(path, n=N, channels=3):
     out.close()
 
 
-def plane_scene(png, cache_dir=None, memory=False):
+def plane_scene(png, cache_dir=None, memory=False, size=6.0, look_at=(0.0, 0.0)):
     """A 6 m textured square seen head-on from HEIGHT metres (every pixel 2.59 texels of the
-    512^2 map: the estimate picks level 1), under a constant environment."""
+    512^2 map: the estimate picks level 1), under a constant environment; or a ``size`` m one
+    seen above the point ``look_at`` (x, z)."""
     s = Scene()
     if cache_dir is not None:
         s.set_mip_cache_dir(str(cache_dir))
@@ -40,11 +41,12 @@ def plane_scene(png, cache_dir=None, memory=False):
     else:
         t = s.add_texture("image", {"file": str(png)})
     m = s.add_material("diffuse", {"albedo": TextureRef(t)})
-    pl = P.plane(6.0, 6.0)
+    pl = P.plane(size, size)
     mesh = s.add_mesh(pl["positions"], pl["indices"], normals=pl["normals"], uvs=pl["uvs"])
     s.add_instance(mesh, np.eye(4), class_id=1, material_id=m)
     s.add_light("environment", {"radiance": 1.0})
-    s.set_camera(PinholeCamera.from_fov(FOV, W, H, PinholeCamera.look_at((0, HEIGHT, 0), (0, 0, 0), (0, 0, 1))))
+    x, z = look_at
+    s.set_camera(PinholeCamera.from_fov(FOV, W, H, PinholeCamera.look_at((x, HEIGHT, z), (x, 0, z), (0, 0, 1))))
     s.commit()
     return s, t
 
@@ -115,6 +117,32 @@ def test_estimated_levels_render_like_full_resolution(tmp_path, memory):
     assert s.estimate_texture_resolution()["textures"][0]["first_resident"] == row["tail_level"]
     s.set_texture_levels({t: 0})
     assert s.estimate_texture_resolution()["textures"][0]["first_resident"] == 0
+
+
+@pytest.mark.parametrize("memory", [False, True], ids=["file", "in-memory pixels"])
+def test_only_the_tiles_the_camera_sees_are_read(tmp_path, memory):
+    # A 24 m square of the 512^2 map seen from 5 m above a point off its centre: level 0
+    # (0.6 texels per pixel) in the 64^2-texel tiles under the view, 3.6 x 2.7 m of 24 x 24 m.
+    png = tmp_path / "noise.png"
+    write_png(png)
+    view = dict(size=24.0, look_at=(5.0, -7.0))
+    full, _ = plane_scene(png, memory=memory, **view)
+    s, t = plane_scene(png, tmp_path / "mips", memory=memory, **view)
+    rgb1, st = lod(s, 16)
+    row = s.estimate_texture_resolution()["textures"][0]
+    print(f"tiles: {row['needed_tiles']} of {row['tiles']} at level {row['needed_level']}; "
+          f"{st['texture_bytes_resident']} of {st['texture_bytes_full']} bytes resident")
+    assert row["needed_level"] == row["first_used"] == 0 and row["tiles"] == 64
+    assert 2 <= row["needed_tiles"] <= 9
+    # Resident: the used tiles of level 0, levels 1 and coarser whole.
+    level1_on = sum((N >> k) ** 2 for k in range(1, 10)) * 12
+    assert st["texture_bytes_resident"] == row["bytes_needed"] == level1_on + row["needed_tiles"] * 64 * 64 * 12
+    # Every lookup falls in a resident tile: the image is the full-resolution render's, bit for bit.
+    assert np.array_equal(rgb1, rgb(full, 16))
+    # Seen from above the centre, other tiles: read then, and the image is again the full one's.
+    s.set_camera(PinholeCamera.from_fov(FOV, W, H, PinholeCamera.look_at((0, HEIGHT, 0), (0, 0, 0), (0, 0, 1))))
+    full.set_camera(PinholeCamera.from_fov(FOV, W, H, PinholeCamera.look_at((0, HEIGHT, 0), (0, 0, 0), (0, 0, 1))))
+    assert np.array_equal(lod(s, 4)[0], rgb(full, 4))
 
 
 def test_levels_kept_from_earlier_frames_change_no_pixel(tmp_path):

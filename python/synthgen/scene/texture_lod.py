@@ -48,14 +48,15 @@ def _name(source: str, width: int = 34) -> str:
 def texture_table(estimate: Mapping[str, Any]) -> str:
     """The per-pyramid table and a totals line, as printed by ``synthgen texres``."""
     head = (f"{'texture':34} {'ids':>7} {'size':>11} {'lv':>3} {'seen':>5} {'min texels/px':>13} "
-            f"{'level':>5} {'needed':>11} {'MiB full':>9} {'MiB needed':>10}")
+            f"{'level':>5} {'needed':>11} {'tiles':>9} {'MiB full':>9} {'MiB needed':>10}")
     lines = [head, "-" * len(head)]
     for r in pyramids(estimate):
         ids = ",".join(str(i) for i in r["texture_ids"])
         rho = f"{r['min_rho']:.2f}" if r["seen"] else "-"
         lines.append(f"{_name(r['source']):34} {ids:>7} {str(r['width']) + 'x' + str(r['height']):>11} "
                      f"{r['levels']:>3} {'yes' if r['seen'] else 'no':>5} {rho:>13} {r['needed_level']:>5} "
-                     f"{str(r['needed_width']) + 'x' + str(r['needed_height']):>11} {_mib(r['bytes_full']):>9} "
+                     f"{str(r['needed_width']) + 'x' + str(r['needed_height']):>11} "
+                     f"{str(r['needed_tiles']) + '/' + str(r['tiles']):>9} {_mib(r['bytes_full']):>9} "
                      f"{_mib(r['bytes_needed']):>10}")
     m = memory_totals(estimate)
     lines.append("-" * len(head))
