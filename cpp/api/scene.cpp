@@ -505,6 +505,7 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   film->stats.mesh_bvh_builds_last_commit = m_stats.mesh_bvh_builds_last_commit;
   film->stats.top_level_builds = m_stats.top_level_builds;
   film->stats.texture_lod_time_s = lod_stats.texture_lod_time_s;
+  film->stats.texture_baked_bytes = lod_stats.texture_baked_bytes;
   texture_memory(&film->stats.texture_bytes_full, &film->stats.texture_bytes_resident);
 }
 

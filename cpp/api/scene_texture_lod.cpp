@@ -7,6 +7,7 @@
 
 #include "api/scene.h"
 #include "core/error.h"
+#include "texture/baked.h"
 #include "texture/mipmap.h"
 
 namespace sg {
@@ -77,8 +78,11 @@ void Scene::set_texture_levels(const std::vector<std::pair<uint32_t, int>>& text
 
 void Scene::use_every_texture_level() {
   for (const auto& e : m_textures)
-    if (e && e->object)
+    if (e && e->object) {
       if (const MipMap* mip = e->object->mipmap()) mip->use_levels(0);
+      // Without texture_lod, bakeable textures are evaluated (docs/texture_lod.md).
+      if (const auto* baked = dynamic_cast<const BakedTexture*>(e->object.get())) baked->clear();
+    }
 }
 
 void Scene::texture_memory(uint64_t* full, uint64_t* resident) const {
@@ -110,6 +114,14 @@ void Scene::apply_texture_lod(const RenderSettings& settings, RenderStats* stats
     if (r.seen) it->second = std::min(it->second, std::max(0, r.needed_level - int(settings.texture_lod_margin)));
     if (r.seen) m_pyramid_last_seen[mip] = now;
   }
+  // Bakeable procedural textures (bake: auto): an image for this frame's camera, or none.
+  for (const auto& e : m_textures)
+    if (e && e->object)
+      if (const auto* baked = dynamic_cast<const BakedTexture*>(e->object.get())) {
+        auto u = est.recorded.by_uv.find(baked);
+        if (u == est.recorded.by_uv.end()) baked->clear();
+        else if (baked->bake(u->second, int(settings.threads))) stats->texture_baked_bytes += baked->bytes();
+      }
   for (const auto& [mip, l] : level) {
     auto m = est.recorded.by_mip.find(mip);
     if (m != est.recorded.by_mip.end() && m->second.lookups > 0) mip->use_tiles(l, m->second.tiles(*mip, l));

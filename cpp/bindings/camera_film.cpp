@@ -27,6 +27,7 @@ py::dict stats_to_dict(const RenderStats& s) {
   d["estimated_psnr_db"] = s.estimated_psnr_db;
   d["denoise_time_s"] = s.denoise_time_s;
   d["texture_lod_time_s"] = s.texture_lod_time_s;
+  d["texture_baked_bytes"] = s.texture_baked_bytes;
   d["texture_bytes_full"] = s.texture_bytes_full;
   d["texture_bytes_resident"] = s.texture_bytes_resident;
   return d;

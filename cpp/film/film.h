@@ -25,9 +25,11 @@ struct RenderStats {
   double estimated_psnr_db = 0.0;
   double denoise_time_s = 0.0;  ///< RenderSettings::denoise: the denoiser's wall time (in wall_time_s too)
   /// RenderSettings::texture_lod: the estimate's wall time (not in wall_time_s), and the
-  /// texel memory of the scene's image textures at full resolution and as rendered.
+  /// texel memory of the scene's image textures at full resolution and as rendered, and of
+  /// the images baked for bakeable procedural textures (bake: auto; the time in
+  /// texture_lod_time_s).
   double texture_lod_time_s = 0.0;
-  uint64_t texture_bytes_full = 0, texture_bytes_resident = 0;
+  uint64_t texture_bytes_full = 0, texture_bytes_resident = 0, texture_baked_bytes = 0;
 };
 
 struct Film {

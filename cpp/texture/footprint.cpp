@@ -158,7 +158,25 @@ std::vector<uint8_t> FootprintRecorder::Use::tiles(const MipMap& mip, int level)
   return out;
 }
 
+void FootprintRecorder::record_uv(const Texture* texture, const Vec2f& uv, float footprint) {
+  if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return;
+  UvUse& u = by_uv[texture];
+  const float f = std::isfinite(footprint) && footprint >= 0.f ? footprint : 0.f;
+  // A footprint of 0 (a point lookup) says nothing about the resolution, only where it fell.
+  if (f > 0.f) u.min_footprint = std::min(u.min_footprint, f);
+  u.lo = Vec2f(std::min(u.lo.x, uv.x - f), std::min(u.lo.y, uv.y - f));
+  u.hi = Vec2f(std::max(u.hi.x, uv.x + f), std::max(u.hi.y, uv.y + f));
+  ++u.lookups;
+}
+
 void FootprintRecorder::merge(const FootprintRecorder& other) {
+  for (const auto& [tex, use] : other.by_uv) {
+    UvUse& u = by_uv[tex];
+    u.min_footprint = std::min(u.min_footprint, use.min_footprint);
+    u.lo = Vec2f(std::min(u.lo.x, use.lo.x), std::min(u.lo.y, use.lo.y));
+    u.hi = Vec2f(std::max(u.hi.x, use.hi.x), std::max(u.hi.y, use.hi.y));
+    u.lookups += use.lookups;
+  }
   for (const auto& [mip, use] : other.by_mip) merge_use(by_mip[mip], use);
   for (const auto& [tex, use] : other.by_texture) merge_use(by_texture[tex], use);
 }

@@ -59,6 +59,16 @@ class FootprintRecorder {
   void record(const Texture* texture, const MipMap& mip, Vec2f a, Vec2f b, const float m[4], Vec2f st,
               WrapMode wrap);
 
+  /// What the lookups of a texture baked on demand (texture/baked.h) needed, in uv units.
+  struct UvUse {
+    float min_footprint = k_inf;  ///< smallest footprint of a lookup
+    Vec2f lo{k_inf, k_inf}, hi{-k_inf, -k_inf};  ///< uv rectangle of the lookups' footprints
+    uint64_t lookups = 0;
+  };
+  /// A lookup of a bakeable texture at `uv` with footprint `footprint` (uv units).
+  void record_uv(const Texture* texture, const Vec2f& uv, float footprint);
+  std::unordered_map<const Texture*, UvUse> by_uv;
+
   /// Adds another recorder's lookups (per-thread recorders are merged once at the end:
   /// minima, so the order does not matter).
   void merge(const FootprintRecorder& other);

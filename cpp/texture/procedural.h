@@ -26,6 +26,7 @@ namespace sg {
 struct ProceduralMapping {
   enum class Kind { UV, Object, World, Relative } kind = Kind::Object;
   Vec3f scale{1.f}, offset{0.f};
+  bool bake = false;  ///< `bake: auto` (texture/baked.h; uv mapping only)
 
   /// The declared parameters `mapping`, `scale`, `offset`.
   static std::vector<ParamDecl> params(const std::string& default_kind = "object") {
@@ -33,7 +34,11 @@ struct ProceduralMapping {
                           "texture coordinates: uv, object- or world-space position, or relative-local "
                           "(object position / bounding-box extent, in [0, 1])"),
             param::vec3("scale", Vec3f(1.f), "multiplies the coordinates (a number or one per axis)").above(0),
-            param::vec3("offset", Vec3f(0.f), "added after scaling")};
+            param::vec3("offset", Vec3f(0.f), "added after scaling"),
+            param::choice("bake", "off", {"off", "auto"},
+                          "auto: with render.texture_lod, baked per frame into an image at the resolution the camera "
+                          "needs (the texture resolution estimate), then looked up instead of evaluated; uv mapping "
+                          "only (docs/texture_lod.md)")};
   }
 
   static ProceduralMapping from_params(const Params& p) {
@@ -42,6 +47,9 @@ struct ProceduralMapping {
     m.kind = k == "uv" ? Kind::UV : k == "world" ? Kind::World : k == "relative" ? Kind::Relative : Kind::Object;
     m.scale = p.get_vec3("scale");
     m.offset = p.get_vec3("offset");
+    m.bake = p.get_string("bake") == "auto";
+    if (m.bake && m.kind != Kind::UV)
+      throw Error("parameter 'bake': auto needs mapping: uv (a " + k + " mapping has no image to bake into)");
     return m;
   }
 

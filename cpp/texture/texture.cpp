@@ -1,5 +1,7 @@
 #include "texture/texture.h"
 
+#include "texture/baked.h"
+
 #include "core/error.h"
 
 namespace sg {
@@ -8,7 +10,10 @@ std::shared_ptr<Texture> create_texture(const std::string& type, const ParamSet&
                                         const std::string& context, ImageCache* images,
                                         const TextureInputs& inputs) {
   PluginContext ctx{inputs, nullptr, images};
-  return Registry::instance().create<Texture>("texture", type, params, ctx, context);
+  std::shared_ptr<Texture> t = Registry::instance().create<Texture>("texture", type, params, ctx, context);
+  // `bake: auto` (procedural textures with uv mapping, checked by the plugin): made bakeable.
+  if (params.get_string("bake", "off") == "auto") return make_baked_texture(std::move(t));
+  return t;
 }
 
 std::vector<std::string> texture_types() { return Registry::instance().names("texture"); }

@@ -29,6 +29,7 @@ const std::map<std::string, std::string> k_not_plugins = {
     {"texture/image_cache.cpp", "decoded images shared by image textures"},
     {"texture/mipmap.cpp", "mip-map pyramids and filtered lookups"},
     {"texture/footprint.cpp", "footprints of texture lookups, recorded for the texture resolution estimate"},
+    {"texture/baked.cpp", "procedural textures baked on demand (bake: auto)"},
     {"light/light.cpp", "the Light interface and create_light"},
     {"medium/tracking.cpp", "majorant grids and tracking shared by the heterogeneous media"},
     {"light/area.cpp", "area lights are made by the scene from emissive materials"},
