@@ -20,17 +20,6 @@ Scene::Scene() : m_accel(new Accel) {
 
 Scene::~Scene() = default;
 
-template <class T>
-T& Scene::get_slot(std::vector<std::optional<T>>& v, uint32_t id, const char* what) {
-  if (id >= v.size() || !v[id]) throw Error(std::string(what) + " " + std::to_string(id) + " does not exist");
-  return *v[id];
-}
-template <class T>
-const T& Scene::get_slot(const std::vector<std::optional<T>>& v, uint32_t id, const char* what) {
-  if (id >= v.size() || !v[id]) throw Error(std::string(what) + " " + std::to_string(id) + " does not exist");
-  return *v[id];
-}
-
 static Bounds3 mesh_bounds(const TriangleMesh& m) {
   Bounds3 b;
   for (const auto& p : m.positions) b.expand(p);
