@@ -1,5 +1,6 @@
-// Conversions shared by the binding files (module.cpp, camera_film.cpp, images.cpp): Python
-// dicts to plugin parameters, 4x4 matrices both ways, and film buffers as numpy views.
+// Conversions shared by the binding files (module.cpp, camera_film.cpp, images.cpp, ...): Python
+// dicts to plugin parameters, 4x4 matrices both ways, and film buffers as numpy views; and the
+// bind_* functions of the other binding files.
 #pragma once
 
 #include <memory>
@@ -13,6 +14,11 @@
 #include "core/math.h"
 #include "core/params.h"
 #include "film/film.h"
+
+namespace sg {
+struct TextureResolution;
+struct TextureEstimate;
+}  // namespace sg
 
 namespace sg::bindings {
 
@@ -49,5 +55,8 @@ void bind_images(py::module_& m);         ///< read_image, read_image_info (imag
 void bind_camera(py::module_& m);         ///< PinholeCamera (camera_film.cpp)
 void bind_render_result(py::module_& m);  ///< RenderResult: the Film's buffers (camera_film.cpp)
 void bind_denoise(py::module_& m);        ///< denoise (denoise.cpp)
+void bind_geometry(py::module_& m);       ///< surface_distances (geometry.cpp)
+/// Scene::estimate_texture_resolution's rows as {'textures', 'camera_rays', 'bounce_rays'} (texture_lod.cpp).
+py::dict texture_estimate_to_py(const std::vector<TextureResolution>& res, const TextureEstimate& raw);
 
 }  // namespace sg::bindings

@@ -9,7 +9,6 @@
 #include "api/scene.h"
 #include "core/error.h"
 #include "core/plugin.h"
-#include "geometry/accel.h"
 #include "bindings/convert.h"
 #include "io/image_io.h"
 #include "io/vdb_io.h"
@@ -217,50 +216,7 @@ PYBIND11_MODULE(_core, m) {
       py::arg("path"), py::arg("grid_name"), py::arg("density"), py::arg("bounds_min"), py::arg("bounds_max"),
       "Writes a density array (z, y, x: x fastest) as the float grid `grid_name` of a new .vdb file\n"
       "over the world box [bounds_min, bounds_max] (for the 'grid' medium; non-zero voxels active).");
-  m.def(
-      "surface_distances",
-      [](py::array_t<float, py::array::c_style | py::array::forcecast> positions,
-         py::array_t<int64_t, py::array::c_style | py::array::forcecast> indices,
-         py::array_t<float, py::array::c_style | py::array::forcecast> points, bool return_triangles) -> py::object {
-        auto shape_ok = [](const py::array& a, const char* what) {
-          if (a.ndim() != 2 || a.shape(1) != 3)
-            throw Error(std::string("surface_distances: ") + what + " must be an (n, 3) array");
-        };
-        shape_ok(positions, "positions");
-        shape_ok(indices, "indices");
-        shape_ok(points, "points");
-        TriangleMesh mesh;
-        mesh.name = "surface_distances";
-        const float* p = positions.data();
-        for (py::ssize_t i = 0; i < positions.shape(0); ++i)
-          mesh.positions.emplace_back(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
-        const int64_t* t = indices.data();
-        for (py::ssize_t i = 0; i < 3 * indices.shape(0); ++i) {
-          if (t[i] < 0 || t[i] >= positions.shape(0))
-            throw Error("surface_distances: index " + std::to_string(t[i]) + " out of range");
-          mesh.indices.push_back(uint32_t(t[i]));
-        }
-        std::vector<Vec3f> q;
-        const float* x = points.data();
-        for (py::ssize_t i = 0; i < points.shape(0); ++i) q.emplace_back(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-        std::vector<float> d;
-        std::vector<uint32_t> tri;
-        {
-          py::gil_scoped_release release;
-          d = surface_distances(mesh, q, return_triangles ? &tri : nullptr);
-        }
-        py::array_t<float> out(py::ssize_t(d.size()));
-        std::copy(d.begin(), d.end(), out.mutable_data());
-        if (!return_triangles) return std::move(out);
-        py::array_t<int64_t> closest(py::ssize_t(tri.size()));
-        std::copy(tri.begin(), tri.end(), closest.mutable_data());
-        return py::make_tuple(out, closest);
-      },
-      py::arg("positions"), py::arg("indices"), py::arg("points"), py::arg("return_triangles") = false,
-      "Distance (float32) from each point (n x 3) to the closest point of the triangle mesh\n"
-      "(positions m x 3, indices k x 3): exact, by Embree point queries. Measures the geometric\n"
-      "error of a level of detail (synthgen.scene.lod). With return_triangles: (distances, index of\n"
-      "each point's closest triangle).");
+  bind_geometry(m);
   m.def("plugin_kinds", []() { return Registry::instance().kinds(); },
         "Plugin kinds of the registry: camera, light, material, render, texture.");
   m.def("plugin_names", [](const std::string& kind) { return Registry::instance().names(kind); }, py::arg("kind"),
@@ -612,39 +568,7 @@ a BVH build). render() commits pending edits first.)doc")
                py::gil_scoped_release release;
                res = s.estimate_texture_resolution(es, &raw);
              }
-             py::list rows;
-             for (const TextureResolution& r : res) {
-               py::dict d;
-               d["texture_id"] = r.texture_id;
-               d["source"] = r.source;
-               d["pyramid"] = r.pyramid;
-               d["width"] = r.width;
-               d["height"] = r.height;
-               d["channels"] = r.channels;
-               d["levels"] = r.levels;
-               d["alpha"] = r.alpha;
-               d["seen"] = r.seen;
-               d["lookups"] = r.lookups;
-               d["needed_level"] = r.needed_level;
-               d["needed_width"] = r.needed_width;
-               d["needed_height"] = r.needed_height;
-               d["texture_level"] = r.texture_level;
-               d["min_rho"] = r.min_rho;
-               d["bytes_full"] = r.bytes_full;
-               d["bytes_needed"] = r.bytes_needed;
-               d["tiles"] = r.tiles;
-               d["needed_tiles"] = r.needed_tiles;
-               d["first_resident"] = r.first_resident;
-               d["first_used"] = r.first_used;
-               d["tail_level"] = r.tail_level;
-               d["bytes_resident"] = r.bytes_resident;
-               rows.append(d);
-             }
-             py::dict out;
-             out["textures"] = rows;
-             out["camera_rays"] = raw.camera_rays;
-             out["bounce_rays"] = raw.bounce_rays;
-             return out;
+             return texture_estimate_to_py(res, raw);
            },
            py::arg("max_depth") = 4, py::arg("max_rays_per_pixel") = 16, py::arg("threads") = 0,
            "The texture resolution estimate for the current camera (docs/texture_lod.md): one camera ray\n"

@@ -67,6 +67,27 @@ static void embree_error(void* user, RTCError code, const char* str) {
   *last_error = std::string("Embree error ") + std::to_string(int(code)) + ": " + (str ? str : "");
 }
 
+/// A triangle geometry with the mesh's vertices and indices copied into Embree's buffers
+/// (not committed); null when Embree cannot allocate them (the device's error function says why).
+static RTCGeometry triangle_geometry(RTCDevice device, const TriangleMesh& mesh) {
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                         3 * sizeof(float), mesh.positions.size()));
+  auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                              3 * sizeof(uint32_t), mesh.triangle_count()));
+  if (!v || !idx) {
+    rtcReleaseGeometry(geom);
+    return nullptr;
+  }
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    v[3 * i] = mesh.positions[i].x;
+    v[3 * i + 1] = mesh.positions[i].y;
+    v[3 * i + 2] = mesh.positions[i].z;
+  }
+  std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
+  return geom;
+}
+
 Accel::Accel() : m_impl(new Impl) {
   m_impl->device = rtcNewDevice("verbose=0");
   if (!m_impl->device) throw Error("could not create the Embree device");
@@ -93,22 +114,11 @@ void Accel::build_mesh(uint32_t slot, const TriangleMesh& mesh, bool needs_alpha
   // (measured on the Cornell box, bench/embree_cbox.py).
   rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-  RTCGeometry geom = rtcNewGeometry(m_impl->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), mesh.positions.size()));
-  auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(uint32_t), mesh.triangle_count()));
-  if (!v || !idx) {
-    rtcReleaseGeometry(geom);
+  RTCGeometry geom = triangle_geometry(m_impl->device, mesh);
+  if (!geom) {
     rtcReleaseScene(scene);
     throw Error("Embree could not allocate buffers for mesh '" + mesh.name + "': " + m_impl->last_error);
   }
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    v[3 * i] = mesh.positions[i].x;
-    v[3 * i + 1] = mesh.positions[i].y;
-    v[3 * i + 2] = mesh.positions[i].z;
-  }
-  std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
   if (needs_alpha_test) {
     rtcSetGeometryIntersectFilterFunction(geom, alpha_filter);
     rtcSetGeometryOccludedFilterFunction(geom, alpha_filter);
@@ -414,23 +424,12 @@ std::vector<float> surface_distances(const TriangleMesh& mesh, const std::vector
   RTCDevice device = rtcNewDevice("verbose=0");
   rtcSetDeviceErrorFunction(device, embree_error, &error);
   RTCScene scene = rtcNewScene(device);
-  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                         3 * sizeof(float), mesh.positions.size()));
-  auto* idx = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                              3 * sizeof(uint32_t), mesh.triangle_count()));
-  if (!v || !idx) {
-    rtcReleaseGeometry(geom);
+  RTCGeometry geom = triangle_geometry(device, mesh);
+  if (!geom) {
     rtcReleaseScene(scene);
     rtcReleaseDevice(device);
     throw Error("Embree could not allocate buffers for mesh '" + mesh.name + "': " + error);
   }
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    v[3 * i] = mesh.positions[i].x;
-    v[3 * i + 1] = mesh.positions[i].y;
-    v[3 * i + 2] = mesh.positions[i].z;
-  }
-  std::copy(mesh.indices.begin(), mesh.indices.end(), idx);
   rtcCommitGeometry(geom);
   rtcAttachGeometry(scene, geom);
   rtcReleaseGeometry(geom);

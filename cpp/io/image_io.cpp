@@ -261,19 +261,27 @@ bool save_mip(const char* path, const ImageData* levels, int count, const float*
   }
 }
 
+/// Opens a file written by save_mip (null with `error` set when it cannot be opened or is not
+/// such a file).
+std::unique_ptr<OIIO::ImageInput> open_mip(const char* path, std::string* error) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    *error = "cannot open (" + OIIO::geterror() + ")";
+    return nullptr;
+  }
+  if (in->spec().get_int_attribute(k_mip_tag, 0) != 1) {
+    *error = "not a synthgen mip file";
+    return nullptr;
+  }
+  return in;
+}
+
 bool load_mip(const char* path, int first, int count, int chbegin, int chend, sg::MipFileHeader* header,
               std::vector<ImageData>* levels, std::string* error) {
   try {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-      *error = "cannot open (" + OIIO::geterror() + ")";
-      return false;
-    }
+    auto in = open_mip(path, error);
+    if (!in) return false;
     const OIIO::ImageSpec& spec0 = in->spec();
-    if (spec0.get_int_attribute(k_mip_tag, 0) != 1) {
-      *error = "not a synthgen mip file";
-      return false;
-    }
     header->channels = spec0.nchannels;
     header->widths.clear();
     header->heights.clear();
@@ -325,15 +333,8 @@ bool load_mip(const char* path, int first, int count, int chbegin, int chend, sg
 bool load_mip_rects(const char* path, int level, const sg::TexelRect* rects, int count, int chbegin, int chend,
                     std::vector<std::vector<float>>* out, std::string* error) {
   try {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-      *error = "cannot open (" + OIIO::geterror() + ")";
-      return false;
-    }
-    if (in->spec().get_int_attribute(k_mip_tag, 0) != 1) {
-      *error = "not a synthgen mip file";
-      return false;
-    }
+    auto in = open_mip(path, error);
+    if (!in) return false;
     if (!in->seek_subimage(0, level)) {
       *error = "no mip level " + std::to_string(level);
       return false;
@@ -352,19 +353,15 @@ bool load_mip_rects(const char* path, int level, const sg::TexelRect* rects, int
       }
       std::vector<float> px(size_t(r.x1 - r.x0) * size_t(r.y1 - r.y0) * size_t(chend - chbegin));
       // NOTE: on tile boundaries (and the image's edges) read_tiles decodes exactly the tiles
-      // of the rectangle (OpenImageIO ImageInput::read_tiles); anything else goes through
-      // read_image's region form.
+      // of the rectangle (OpenImageIO ImageInput::read_tiles); other rectangles are refused.
       const bool aligned = spec.tile_width > 0 && r.x0 % spec.tile_width == 0 && r.y0 % spec.tile_height == 0 &&
                            (r.x1 % spec.tile_width == 0 || r.x1 == spec.width) &&
                            (r.y1 % spec.tile_height == 0 || r.y1 == spec.height);
-      bool ok = aligned ? in->read_tiles(0, level, r.x0, r.x1, r.y0, r.y1, 0, 1, chbegin, chend,
-                                         OIIO::TypeDesc::FLOAT, px.data())
-                        : false;
       if (!aligned) {
         *error = "texel rectangle not on the file's tiles";
         return false;
       }
-      if (!ok) {
+      if (!in->read_tiles(0, level, r.x0, r.x1, r.y0, r.y1, 0, 1, chbegin, chend, OIIO::TypeDesc::FLOAT, px.data())) {
         *error = "cannot read tiles of mip level " + std::to_string(level) + " (" + in->geterror() + ")";
         return false;
       }

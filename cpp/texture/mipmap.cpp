@@ -154,6 +154,30 @@ void MipMap::set_tail() {
   while (m_tail > 0 && std::max(width(m_tail - 1), height(m_tail - 1)) <= k_tail_texels) --m_tail;
 }
 
+namespace {
+
+/// The texels of rectangle `r` of a row-major level `width` texels wide, row-major over `r`.
+std::vector<float> cut_tile(const std::vector<float>& level, int width, int channels, const TexelRect& r) {
+  std::vector<float> tile;
+  tile.reserve(size_t(r.x1 - r.x0) * size_t(r.y1 - r.y0) * size_t(channels));
+  for (int y = r.y0; y < r.y1; ++y)
+    tile.insert(tile.end(), level.begin() + (size_t(y) * width + r.x0) * channels,
+                level.begin() + (size_t(y) * width + r.x1) * channels);
+  return tile;
+}
+
+}  // namespace
+
+TexelRect MipMap::tile_rect(int level, size_t t) const {
+  const size_t tx = size_t(tiles_x(level));
+  TexelRect r;
+  r.x0 = int(t % tx) * k_tile;
+  r.y0 = int(t / tx) * k_tile;
+  r.x1 = std::min(width(level), r.x0 + k_tile);
+  r.y1 = std::min(height(level), r.y0 + k_tile);
+  return r;
+}
+
 void MipMap::make_whole(int first) const {
   for (int l = first; l < levels(); ++l) {
     m_levels[size_t(l)].used.clear();
@@ -196,31 +220,21 @@ void MipMap::use_tiles(int first, const std::vector<uint8_t>& used) const {
   Level& lv = m_levels[size_t(first)];
   if (lv.data.empty()) {
     if (lv.tiles.size() != n) lv.tiles.assign(n, {});
-    const int tx = tiles_x(first);
-    auto rect = [&](size_t t) {
-      TexelRect r;
-      r.x0 = int(t % size_t(tx)) * k_tile;
-      r.y0 = int(t / size_t(tx)) * k_tile;
-      r.x1 = std::min(lv.width, r.x0 + k_tile);
-      r.y1 = std::min(lv.height, r.y0 + k_tile);
-      return r;
-    };
     std::vector<size_t> missing;
     for (size_t t = 0; t < n; ++t)
       if (used[t] && lv.tiles[t].empty()) missing.push_back(t);
     std::vector<std::vector<float>> read;  // the missing tiles from the tile source, in one pass
     if (m_tile_source && !missing.empty()) {
       std::vector<TexelRect> rects;
-      for (size_t t : missing) rects.push_back(rect(t));
+      for (size_t t : missing) rects.push_back(tile_rect(first, t));
       read = m_tile_source(first, rects);
       if (read.size() != missing.size()) throw Error("image texture: the tile source returned too few tiles");
     }
     std::vector<float> whole;  // the level, when tiles are cut from it (no tile source)
     for (size_t k = 0; k < missing.size(); ++k) {
       const size_t t = missing[k];
-      const TexelRect r = rect(t);
-      const int x0 = r.x0, y0 = r.y0, x1 = r.x1, y1 = r.y1;
-      const size_t texels = size_t(x1 - x0) * size_t(y1 - y0) * m_channels;
+      const TexelRect r = tile_rect(first, t);
+      const size_t texels = size_t(r.x1 - r.x0) * size_t(r.y1 - r.y0) * m_channels;
       if (m_tile_source) {
         lv.tiles[t] = std::move(read[k]);
       } else {
@@ -231,11 +245,7 @@ void MipMap::use_tiles(int first, const std::vector<uint8_t>& used) const {
             throw Error("image texture: mip level " + std::to_string(first) + " read back with the wrong size");
           whole = std::move(d[0]);
         }
-        std::vector<float>& tile = lv.tiles[t];
-        tile.reserve(texels);
-        for (int y = y0; y < y1; ++y)
-          tile.insert(tile.end(), whole.begin() + (size_t(y) * lv.width + x0) * m_channels,
-                      whole.begin() + (size_t(y) * lv.width + x1) * m_channels);
+        lv.tiles[t] = cut_tile(whole, lv.width, m_channels, r);
       }
       if (lv.tiles[t].size() != texels)
         throw Error("image texture: a tile of mip level " + std::to_string(first) + " read back with the wrong size");
@@ -268,17 +278,10 @@ void MipMap::drop_unused() const {
   if (m_first >= levels()) return;
   Level& f = m_levels[size_t(m_first)];
   if (f.used.empty()) return;
-  const int tx = tiles_x(m_first);
   if (!f.data.empty()) {  // whole, read in part: keep the used tiles only
     f.tiles.assign(f.used.size(), {});
-    for (size_t t = 0; t < f.used.size(); ++t) {
-      if (!f.used[t]) continue;
-      const int x0 = int(t % size_t(tx)) * k_tile, y0 = int(t / size_t(tx)) * k_tile;
-      const int x1 = std::min(f.width, x0 + k_tile), y1 = std::min(f.height, y0 + k_tile);
-      for (int y = y0; y < y1; ++y)
-        f.tiles[t].insert(f.tiles[t].end(), f.data.begin() + (size_t(y) * f.width + x0) * m_channels,
-                          f.data.begin() + (size_t(y) * f.width + x1) * m_channels);
-    }
+    for (size_t t = 0; t < f.used.size(); ++t)
+      if (f.used[t]) f.tiles[t] = cut_tile(f.data, f.width, m_channels, tile_rect(m_first, t));
     std::vector<float>().swap(f.data);
   }
   for (size_t t = 0; t < f.used.size() && t < f.tiles.size(); ++t)
@@ -416,12 +419,10 @@ uint64_t MipMap::bytes(int first_level) const {
 uint64_t MipMap::bytes(int level, const std::vector<uint8_t>& used) const {
   if (used.empty() || level >= levels()) return bytes(level);
   uint64_t n = bytes(level + 1);
-  const int tx = tiles_x(level);
   for (size_t t = 0; t < used.size(); ++t) {
     if (!used[t]) continue;
-    const int x0 = int(t % size_t(tx)) * k_tile, y0 = int(t / size_t(tx)) * k_tile;
-    n += uint64_t(std::min(width(level), x0 + k_tile) - x0) * uint64_t(std::min(height(level), y0 + k_tile) - y0) *
-         uint64_t(m_channels) * sizeof(float);
+    const TexelRect r = tile_rect(level, t);
+    n += uint64_t(r.x1 - r.x0) * uint64_t(r.y1 - r.y0) * uint64_t(m_channels) * sizeof(float);
   }
   return n;
 }

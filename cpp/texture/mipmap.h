@@ -150,6 +150,8 @@ class MipMap {
     std::vector<uint8_t> used;
   };
   void set_tail();
+  /// The texels of tile `t` (row-major index) of `level`.
+  TexelRect tile_rect(int level, size_t t) const;
   /// Levels [first, levels()) resident and whole (read back, tiled ones completed).
   void make_whole(int first) const;
   /// Pointer to texel (x, y) (in range) of level `level`, or null when a lookup must not read

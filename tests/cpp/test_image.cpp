@@ -18,21 +18,11 @@
 #include "texture/mipmap.h"
 #include "texture/texture.h"
 
+#include "image_checks.h"
+
 using namespace sg;
 
 namespace {
-
-ImageData random_image(int w, int h, int channels, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(0.f, 1.f);
-  ImageData img;
-  img.width = w;
-  img.height = h;
-  img.channels = channels;
-  img.pixels.resize(size_t(w) * h * channels);
-  for (float& v : img.pixels) v = u(rng);
-  return img;
-}
 
 /// Mean of level `l` in double precision.
 Color level_mean(const MipMap& m, int l) {
