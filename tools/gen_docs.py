@@ -51,6 +51,8 @@ CPP_FOLDERS = {
                   "(`volume.h`) and its settings",
     "film": "radiance and label buffers, render statistics; the denoiser (`denoise.cpp`)",
     "io": "each third-party API in one file: OpenImageIO (a lazily loaded plugin), assimp",
+    "ext": "user extensions: loading compiled C libraries (`dlopen`, the ABI of "
+           "`python/synthgen/include/synthgen_ext.h`), their textures and shapes as run-time plugins",
     "api": "Scene, the integration API; its XML persistence (`scene_xml.cpp`, pugixml) and file import",
     "bindings": "the pybind11 module `synthgen._core`",
     "reader": "`synthgen-reader`, the executable that decodes one untrusted file (mesh, image) with time and "

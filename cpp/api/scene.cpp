@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "ext/extension.h"
 #include "film/film.h"
 #include "integrator/interaction.h"
 
@@ -21,6 +22,7 @@ Scene::Scene() : m_accel(new Accel) {
 Scene::~Scene() = default;
 
 static Bounds3 mesh_bounds(const TriangleMesh& m) {
+  if (m.shape) return m.shape->bounds();
   Bounds3 b;
   for (const auto& p : m.positions) b.expand(p);
   return b;
@@ -36,6 +38,22 @@ uint32_t Scene::add_mesh(TriangleMesh mesh) {
   MeshEntry e;
   e.bounds = mesh_bounds(mesh);
   e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
+  m_meshes.emplace_back(std::move(e));
+  return id;
+}
+
+uint32_t Scene::add_shape(const std::string& type, const ParamSet& params) {
+  uint32_t id = uint32_t(m_meshes.size());
+  auto shape = Registry::instance().create<ExtensionShape>("shape", type, params, PluginContext{},
+                                                            "shape " + std::to_string(id));
+  TriangleMesh mesh;
+  mesh.name = type;
+  mesh.shape = shape;
+  MeshEntry e;
+  e.bounds = mesh_bounds(mesh);
+  e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
+  e.shape_type = type;
+  e.shape_params = params;
   m_meshes.emplace_back(std::move(e));
   return id;
 }
@@ -488,6 +506,7 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   }
   uint64_t alpha_calls_before = m_accel->alpha_test_calls();
   render_path_traced(m_render_scene, settings, film);
+  check_extension_failures();
   if (settings.denoise && !settings.labels_only) denoise_film(film);
   film->stats.alpha_test_calls = m_accel->alpha_test_calls() - alpha_calls_before;
   film->stats.mesh_bvh_builds = m_stats.mesh_bvh_builds;
@@ -496,6 +515,21 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   film->stats.texture_lod_time_s = lod_stats.texture_lod_time_s;
   film->stats.texture_baked_bytes = lod_stats.texture_baked_bytes;
   texture_memory(&film->stats.texture_bytes_full, &film->stats.texture_bytes_resident);
+}
+
+void Scene::check_extension_failures() const {
+  // NOTE: a user extension's non-finite output is replaced by 0 where it happens (inside the
+  // render loop nothing can throw); the render then fails, never returning damaged pixels.
+  for (size_t i = 0; i < m_textures.size(); ++i)
+    if (m_textures[i]) {
+      std::string f = m_textures[i]->object->failure();
+      if (!f.empty()) throw Error("render: texture " + std::to_string(i) + ": " + f);
+    }
+  for (size_t i = 0; i < m_meshes.size(); ++i)
+    if (m_meshes[i] && m_meshes[i]->mesh->shape) {
+      std::string f = m_meshes[i]->mesh->shape->failure();
+      if (!f.empty()) throw Error("render: mesh " + std::to_string(i) + ": " + f);
+    }
 }
 
 }  // namespace sg

@@ -117,6 +117,11 @@ class Scene {
   void update_mesh(uint32_t id, TriangleMesh mesh);
   void remove_mesh(uint32_t id);
   const TriangleMesh& mesh(uint32_t id) const;
+  /// A user shape (a "shape" plugin of a loaded extension, ext/extension.h) in the mesh
+  /// library: instanced, labelled, shadowed and lit like a mesh (it does not emit as a light
+  /// source: emissive materials on it are seen, not sampled). Throws sg::Error for an unknown
+  /// shape or bad parameters.
+  uint32_t add_shape(const std::string& type, const ParamSet& params);
   /// Imports OBJ (+MTL), PLY, glTF 2.0 / GLB via assimp, flattening node transforms into
   /// one mesh with per-triangle materials ("principled": glTF metallic-roughness, OBJ/MTL
   /// mapped, textures resolved relative to the file). Throws sg::FileError naming the file.
@@ -250,6 +255,8 @@ class Scene {
   struct LightEntry { std::string type; ParamSet params; std::shared_ptr<Light> object; };
   struct MeshEntry {
     std::shared_ptr<TriangleMesh> mesh;
+    std::string shape_type;  ///< a user shape's plugin name ("" for triangle meshes)
+    ParamSet shape_params;
     Bounds3 bounds;
     std::vector<const Material*> triangle_materials;  // resolved at commit
     bool dirty = true;
@@ -286,6 +293,9 @@ class Scene {
   /// Sets a material's ambient-occlusion needs from the textures and materials it refers to.
   void assign_ao(MaterialEntry& e) const;
   void build_render_scene();
+  /// Throws naming the first texture or shape of a user extension that produced a non-finite
+  /// value (or an invalid hit) so far.
+  void check_extension_failures() const;
   /// Every level of every pyramid used (read back where dropped): a render without
   /// RenderSettings::texture_lod sees full-resolution textures whatever an earlier one kept.
   void use_every_texture_level();

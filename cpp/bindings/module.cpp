@@ -238,10 +238,12 @@ PYBIND11_MODULE(_core, m) {
   bind_render_result(m);
   bind_denoise(m);
 
-  py::class_<Scene>(m, "Scene", R"doc(Integration API: typed libraries with stable integer ids.
+  py::class_<Scene> scene_class(m, "Scene", R"doc(Integration API: typed libraries with stable integer ids.
 
 Edits accumulate; commit() applies only what changed (only new or edited meshes get
-a BVH build). render() commits pending edits first.)doc")
+a BVH build). render() commits pending edits first.)doc");
+  bind_extensions(m, scene_class);
+  scene_class
       .def(py::init<>())
       .def("add_mesh",
            [](Scene& s, const py::object& positions, const py::object& indices, const py::object& normals,
@@ -362,6 +364,8 @@ a BVH build). render() commits pending edits first.)doc")
                O(i, 1) = c.y;
                O(i, 2) = c.z;
              }
+             std::string failure = t.failure();  // a user extension's non-finite value
+             if (!failure.empty()) throw Error("texture " + std::to_string(id) + ": " + failure);
              return out;
            },
            py::arg("texture"), py::arg("points"), py::arg("object_lo") = std::array<float, 3>{0.f, 0.f, 0.f},

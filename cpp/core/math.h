@@ -94,6 +94,15 @@ struct Frame {
 
 /// Affine 4x4 transform stored row-major; the last row is (0, 0, 0, 1).
 /// The inverse is computed once (with Eigen, in math.cpp) and cached.
+/// An axis-aligned box (empty: lo > hi).
+struct Bounds3 {
+  Vec3f lo{k_inf, k_inf, k_inf}, hi{-k_inf, -k_inf, -k_inf};
+  void expand(const Vec3f& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
+  bool empty() const { return lo.x > hi.x; }
+  Vec3f center() const { return (lo + hi) * 0.5f; }
+  float radius() const { return empty() ? 0.f : 0.5f * length(hi - lo); }
+};
+
 struct Transform {
   std::array<float, 16> m{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   std::array<float, 16> m_inv{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};

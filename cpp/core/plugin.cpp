@@ -442,11 +442,31 @@ bool Registry::add_entry(PluginInfo info, void (*factory)(), const char* file) {
       }
     }
   }
+  std::lock_guard<std::mutex> lock(m_mutex);
   m_entries.emplace(key, Entry{std::move(info), factory});
   return true;
 }
 
+void Registry::add_runtime_entry(PluginInfo info, void (*factory)()) {
+  std::lock_guard<std::mutex> lock(m_mutex);
+  auto key = std::make_pair(info.kind, info.name);
+  auto it = m_entries.find(key);
+  if (it != m_entries.end()) {
+    if (!it->second.runtime)
+      throw Error(info.file + ": " + info.label() + " has the name of a built-in " + info.kind + " (" +
+                  it->second.info.file + "); rename it");
+    m_replaced.push_back(m_entries.extract(it));
+  }
+  m_entries.emplace(key, Entry{std::move(info), factory, true});
+}
+
+bool Registry::is_runtime(const std::string& kind, const std::string& name) const {
+  const Entry* e = find_entry(kind, name);
+  return e && e->runtime;
+}
+
 const Registry::Entry* Registry::find_entry(const std::string& kind, const std::string& name) const {
+  std::lock_guard<std::mutex> lock(m_mutex);
   auto it = m_entries.find({kind, name});
   return it == m_entries.end() ? nullptr : &it->second;
 }
@@ -457,6 +477,7 @@ const PluginInfo* Registry::find(const std::string& kind, const std::string& nam
 }
 
 std::vector<std::string> Registry::names(const std::string& kind) const {
+  std::lock_guard<std::mutex> lock(m_mutex);
   std::vector<std::string> out;
   for (const auto& kv : m_entries)
     if (kv.first.first == kind) out.push_back(kv.first.second);
@@ -464,6 +485,7 @@ std::vector<std::string> Registry::names(const std::string& kind) const {
 }
 
 std::vector<std::string> Registry::kinds() const {
+  std::lock_guard<std::mutex> lock(m_mutex);
   std::set<std::string> k;
   for (const auto& kv : m_entries) k.insert(kv.first.first);
   return {k.begin(), k.end()};

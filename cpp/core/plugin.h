@@ -19,6 +19,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -220,6 +221,16 @@ class Registry {
   bool add(PluginInfo info, PluginFactory<T> factory, const char* file) {
     return add_entry(std::move(info), reinterpret_cast<void (*)()>(factory), file);
   }
+  /// Registers a plugin at run time (user extensions, ext/extension.h): `info.file` names its
+  /// source. Replaces an earlier run-time plugin of the same kind and name (a recompiled
+  /// extension); throws sg::Error when a built-in plugin has the name. Thread-safe; a replaced
+  /// declaration stays valid (plugins created from it keep pointing at it).
+  template <class T>
+  void add_runtime(PluginInfo info, PluginFactory<T> factory) {
+    add_runtime_entry(std::move(info), reinterpret_cast<void (*)()>(factory));
+  }
+  /// True when (kind, name) was registered at run time.
+  bool is_runtime(const std::string& kind, const std::string& name) const;
 
   /// The declaration of plugin `name` of `kind`; throws sg::Error with "did you mean" and
   /// the list of known names when there is none.
@@ -245,13 +256,21 @@ class Registry {
   struct Entry {
     PluginInfo info;
     void (*factory)();
+    bool runtime = false;
   };
   bool add_entry(PluginInfo info, void (*factory)(), const char* file);
+  void add_runtime_entry(PluginInfo info, void (*factory)());
   void run(const std::string& kind, const std::string& name, const ParamSet& params, const std::string& context,
            const std::function<void(const Entry&, const Params&)>& call) const;
   const Entry* find_entry(const std::string& kind, const std::string& name) const;
 
-  std::map<std::pair<std::string, std::string>, Entry> m_entries;
+  using Entries = std::map<std::pair<std::string, std::string>, Entry>;
+  Entries m_entries;
+  /// Replaced run-time entries, kept so that references to their declarations stay valid
+  /// (map nodes keep their address when extracted).
+  std::vector<Entries::node_type> m_replaced;
+  /// Guards the entries: run-time plugins are added while other threads may create plugins.
+  mutable std::mutex m_mutex;
 };
 
 /// Checks `params` against the declaration of (kind, name) without creating anything

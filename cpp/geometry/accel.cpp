@@ -60,6 +60,56 @@ void alpha_filter(const RTCFilterFunctionNArguments* args) {
   }
 }
 
+// User shapes (TriangleMesh::shape): one user primitive whose callbacks call the shape.
+// NOTE: Embree hands user geometry of an instanced scene the ray in the instance's object
+// space (API manual, "User Geometry"): t is shared with the world ray since the transform is
+// affine; the callback writes the hit (instID from the context) as Embree's triangles do.
+void shape_bounds(const RTCBoundsFunctionArguments* args) {
+  Bounds3 b = static_cast<const UserShape*>(args->geometryUserPtr)->bounds();
+  args->bounds_o->lower_x = b.lo.x; args->bounds_o->lower_y = b.lo.y; args->bounds_o->lower_z = b.lo.z;
+  args->bounds_o->upper_x = b.hi.x; args->bounds_o->upper_y = b.hi.y; args->bounds_o->upper_z = b.hi.z;
+}
+
+void shape_intersect(const RTCIntersectFunctionNArguments* args) {
+  const auto* shape = static_cast<const UserShape*>(args->geometryUserPtr);
+  const unsigned n = args->N;
+  RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, n);
+  RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, n);
+  for (unsigned i = 0; i < n; ++i) {
+    if (args->valid[i] != -1) continue;
+    Vec3f o(RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i), RTCRayN_org_z(ray, n, i));
+    Vec3f d(RTCRayN_dir_x(ray, n, i), RTCRayN_dir_y(ray, n, i), RTCRayN_dir_z(ray, n, i));
+    float t;
+    Vec3f nrm;
+    Vec2f uv;
+    if (!shape->intersect(o, d, RTCRayN_tnear(ray, n, i), RTCRayN_tfar(ray, n, i), &t, &nrm, &uv)) continue;
+    RTCRayN_tfar(ray, n, i) = t;
+    RTCHitN_Ng_x(hit, n, i) = nrm.x;
+    RTCHitN_Ng_y(hit, n, i) = nrm.y;
+    RTCHitN_Ng_z(hit, n, i) = nrm.z;
+    RTCHitN_u(hit, n, i) = uv.x;
+    RTCHitN_v(hit, n, i) = uv.y;
+    RTCHitN_primID(hit, n, i) = args->primID;
+    RTCHitN_geomID(hit, n, i) = args->geomID;
+    RTCHitN_instID(hit, n, i, 0) = args->context->instID[0];
+  }
+}
+
+void shape_occluded(const RTCOccludedFunctionNArguments* args) {
+  const auto* shape = static_cast<const UserShape*>(args->geometryUserPtr);
+  const unsigned n = args->N;
+  for (unsigned i = 0; i < n; ++i) {
+    if (args->valid[i] != -1) continue;
+    Vec3f o(RTCRayN_org_x(args->ray, n, i), RTCRayN_org_y(args->ray, n, i), RTCRayN_org_z(args->ray, n, i));
+    Vec3f d(RTCRayN_dir_x(args->ray, n, i), RTCRayN_dir_y(args->ray, n, i), RTCRayN_dir_z(args->ray, n, i));
+    float t;
+    Vec3f nrm;
+    Vec2f uv;
+    if (shape->intersect(o, d, RTCRayN_tnear(args->ray, n, i), RTCRayN_tfar(args->ray, n, i), &t, &nrm, &uv))
+      RTCRayN_tfar(args->ray, n, i) = -k_inf;
+  }
+}
+
 }  // namespace
 
 static void embree_error(void* user, RTCError code, const char* str) {
@@ -114,7 +164,17 @@ void Accel::build_mesh(uint32_t slot, const TriangleMesh& mesh, bool needs_alpha
   // (measured on the Cornell box, bench/embree_cbox.py).
   rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-  RTCGeometry geom = triangle_geometry(m_impl->device, mesh);
+  RTCGeometry geom;
+  if (mesh.shape) {
+    geom = rtcNewGeometry(m_impl->device, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(geom, 1);
+    rtcSetGeometryUserData(geom, const_cast<UserShape*>(mesh.shape.get()));
+    rtcSetGeometryBoundsFunction(geom, shape_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(geom, shape_intersect);
+    rtcSetGeometryOccludedFunction(geom, shape_occluded);
+  } else {
+    geom = triangle_geometry(m_impl->device, mesh);
+  }
   if (!geom) {
     rtcReleaseScene(scene);
     throw Error("Embree could not allocate buffers for mesh '" + mesh.name + "': " + m_impl->last_error);
@@ -221,6 +281,7 @@ bool Accel::intersect(const Ray& ray, RayHit* hit, RayLayer layer) const {
   hit->t = rh.ray.tfar;
   hit->u = rh.hit.u;
   hit->v = rh.hit.v;
+  hit->ng = Vec3f(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
   hit->prim = rh.hit.primID;
   hit->inst = rh.hit.instID[0];
   return true;
@@ -280,6 +341,7 @@ void scatter_hits(const RH& rh, const int* lanes, int n, HitPacket* hits) {
     h.t = rh.ray.tfar[k];
     h.u = rh.hit.u[k];
     h.v = rh.hit.v[k];
+    h.ng = Vec3f(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]);
     h.prim = rh.hit.primID[k];
     h.inst = rh.hit.instID[0][k];
   }

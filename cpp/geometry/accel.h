@@ -13,9 +13,12 @@ namespace sg {
 
 /// Result of a closest-hit query. `inst` is the instance slot, `prim` the triangle index,
 /// (u, v) the barycentric coordinates of vertices 1 and 2.
+/// For user shapes (TriangleMesh::shape), (u, v) are the shape's surface coordinates and
+/// `ng` its object-space unit normal (for triangles, Embree's unnormalized geometric normal).
 struct RayHit {
   float t = k_inf;
   float u = 0.f, v = 0.f;
+  Vec3f ng{0.f};
   uint32_t prim = 0;
   uint32_t inst = 0;
 };
@@ -78,7 +81,8 @@ class Accel {
   Accel(const Accel&) = delete;
   Accel& operator=(const Accel&) = delete;
 
-  /// Builds (or rebuilds) the bottom-level BVH of mesh slot `mesh_slot`. With
+  /// Builds (or rebuilds) the bottom-level BVH of mesh slot `mesh_slot` (a user shape's: one
+  /// Embree user primitive calling UserShape::intersect; the mesh keeps the shape alive). With
   /// `needs_alpha_test`, hits on it are filtered by the alpha test (Embree filter functions).
   /// Switching a mesh's alpha test on or off takes a rebuild (Embree re-commits the scene).
   void build_mesh(uint32_t mesh_slot, const TriangleMesh& mesh, bool needs_alpha_test = false);

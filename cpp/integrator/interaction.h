@@ -31,9 +31,41 @@ inline float next_float_down(float v) {
 /// sec. 6.8: gamma(n) = n u / (1 - n u), u = 2^-24.
 constexpr float gamma_n(int n) { return (n * 0x1p-24f) / (1 - n * 0x1p-24f); }
 
-/// `need_tangent` = false skips dpdu (left zero) for materials that do not read it.
-inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const RayHit& hit, bool need_tangent = true) {
+/// The interaction of a hit on a user shape (TriangleMesh::shape): the point along the world
+/// ray, the shape's normal and surface coordinates from the hit.
+inline SurfaceInteraction make_shape_interaction(const InstanceRecord& inst, const RayHit& hit, const Ray& ray) {
+  const Transform& T = inst.world_from_object;
+  SurfaceInteraction si;
+  si.p = ray.o + ray.d * hit.t;
+  si.p_object = T.apply_inverse_point(si.p);
+  float l = length(hit.ng);
+  si.n_object = l > 0.f && std::isfinite(l) ? hit.ng / l : Vec3f(0.f, 0.f, 1.f);
+  si.ng = normalize(T.apply_normal(si.n_object));
+  si.ns = si.ng;
+  // NOTE: the hit point is as exact as the shape's routine (sphere tracing stops at a
+  // tolerance): its error is taken as 1e-5 of the shape's world-space size plus the
+  // rounding of o + t d (pbrt-v4 sec. 6.8.5 style, gamma(7) of the largest coordinate),
+  // which the shapes of synthgen_ext.h must stay within.
+  Vec3f ext = inst.object_hi - inst.object_lo;
+  float size = max_component(ext) / std::max(inst.object_per_world, 1e-20f);
+  si.p_error = Vec3f(1e-5f * size + gamma_n(7) * max_component(vabs(si.p)));
+  si.uv = Vec2f(hit.u, hit.v);
+  si.dpdu = Frame(si.ns).s;
+  si.inst = hit.inst;
+  si.prim = hit.prim;
+  si.object_lo = inst.object_lo;
+  si.object_hi = inst.object_hi;
+  si.object_per_world = inst.object_per_world;
+  si.world_from_object = &inst.world_from_object;
+  return si;
+}
+
+/// `need_tangent` = false skips dpdu (left zero) for materials that do not read it. `ray` is
+/// the ray that found the hit (read for user shapes only).
+inline SurfaceInteraction make_interaction(const InstanceRecord& inst, const RayHit& hit, const Ray& ray,
+                                           bool need_tangent = true) {
   const TriangleMesh& m = *inst.mesh;
+  if (m.shape) return make_shape_interaction(inst, hit, ray);
   uint32_t i0 = m.indices[3 * hit.prim], i1 = m.indices[3 * hit.prim + 1], i2 = m.indices[3 * hit.prim + 2];
   const Vec3f &p0 = m.positions[i0], &p1 = m.positions[i1], &p2 = m.positions[i2];
   float b1 = hit.u, b2 = hit.v, b0 = 1.f - b1 - b2;
@@ -123,7 +155,7 @@ inline bool alpha_test_hit(const void* user, uint32_t inst_slot, uint32_t prim, 
   if (!mat->has_alpha()) return true;
   const TriangleMesh& m = *inst.mesh;
   SurfaceInteraction si;
-  if (!m.uvs.empty()) {
+  if (!m.uvs.empty() && !m.shape) {
     uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
     si.uv = m.uvs[i0] * (1.f - u - v) + m.uvs[i1] * u + m.uvs[i2] * v;
   } else {

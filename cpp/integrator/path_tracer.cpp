@@ -163,7 +163,7 @@ class PathTracer {
     const Material* mat = sc.material_of(inst, hit.prim);
     const Material::Traits traits = mat->traits();
     const uint32_t needs = traits.needs;
-    SurfaceInteraction si = make_interaction(inst, hit, (needs & k_needs_tangent) != 0);
+    SurfaceInteraction si = make_interaction(inst, hit, st.ray, (needs & k_needs_tangent) != 0);
     si.primary = st.bounce == 0;
     if (m_s.texture_filtering) {
       st.cone_width += st.cone_spread * hit.t;  // ray_cone.h, eq. (29)
@@ -466,7 +466,7 @@ class PathTracer {
     if (!sc.accel->intersect(ray, &hit)) return false;  // film is initialised to background
     const InstanceRecord& inst = sc.instances[hit.inst];
     const Material* mat = sc.material_of(inst, hit.prim);
-    SurfaceInteraction si = make_interaction(inst, hit, (mat->needs() & k_needs_tangent) != 0);
+    SurfaceInteraction si = make_interaction(inst, hit, ray, (mat->needs() & k_needs_tangent) != 0);
     // The albedo label is filtered over the whole pixel's cone (no sub-pixel scaling):
     // the pixel-centre ray stands for the pixel.
     if (m_s.texture_filtering) {

@@ -43,6 +43,9 @@ struct ConeTriangle {
 
 inline ConeTriangle cone_triangle(const InstanceRecord& inst, uint32_t prim) {
   const TriangleMesh& m = *inst.mesh;
+  // A user shape has no triangle: a degenerate one (no uv footprint; the world footprint of
+  // 3D procedural textures is still known).
+  if (m.shape) return ConeTriangle{Vec3f(0.f), Vec3f(0.f), Vec2f(0.f, 0.f), Vec2f(0.f, 0.f)};
   uint32_t i0 = m.indices[3 * prim], i1 = m.indices[3 * prim + 1], i2 = m.indices[3 * prim + 2];
   const Transform& T = inst.world_from_object;
   ConeTriangle t;

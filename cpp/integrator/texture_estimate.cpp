@@ -106,7 +106,7 @@ class Estimator {
     }
     const InstanceRecord& inst = m_sc.instances[hit.inst];
     const Material* mat = m_sc.material_of(inst, hit.prim);
-    SurfaceInteraction si = make_interaction(inst, hit, true);
+    SurfaceInteraction si = make_interaction(inst, hit, r.ray, true);
     si.primary = true;  // stochastic mixes look both components up
     Vec3f qx, qy;
     if (!plane_point(r.ox, r.dx, si.p, si.ng, &qx) || !plane_point(r.oy, r.dy, si.p, si.ng, &qy)) return;

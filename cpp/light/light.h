@@ -15,14 +15,6 @@
 
 namespace sg {
 
-struct Bounds3 {
-  Vec3f lo{k_inf, k_inf, k_inf}, hi{-k_inf, -k_inf, -k_inf};
-  void expand(const Vec3f& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
-  bool empty() const { return lo.x > hi.x; }
-  Vec3f center() const { return (lo + hi) * 0.5f; }
-  float radius() const { return empty() ? 0.f : 0.5f * length(hi - lo); }
-};
-
 /// Where a light is sampled from: the shading point and its error bound.
 struct LightSampleContext {
   Vec3f p;

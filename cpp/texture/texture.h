@@ -82,6 +82,9 @@ class Texture {
   virtual float eval_alpha(const Vec2f& uv, float footprint = 0.f) const { return 1.f; }
   /// The pyramid an image texture reads (texture/mipmap.h); null for other textures.
   virtual const MipMap* mipmap() const { return nullptr; }
+  /// What went wrong during lookups ("" when nothing did): user extensions' textures record
+  /// non-finite outputs here, and the render that saw one fails with this message.
+  virtual std::string failure() const { return {}; }
 
  protected:
   /// For textures that know at construction that they are constant.

@@ -286,7 +286,7 @@ void run_scale(double scale, uint64_t seed, Stats* st) {
       continue;
     }
     ++st->targeted;
-    SurfaceInteraction si = make_interaction(sc->records[t.inst], hit);
+    SurfaceInteraction si = make_interaction(sc->records[t.inst], hit, ray);
     auto is_self = [&](const RayHit& h) { return h.inst == si.inst && h.prim == si.prim; };
     D3 ng = d3(si.ng);
 

@@ -154,3 +154,11 @@ def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str,
 def one_line(e: BaseException) -> str:
     text = str(e).strip() or type(e).__name__
     return " ".join(text.split("\n"))
+
+
+def add_extension_option(p: argparse.ArgumentParser) -> None:
+    """``--allow-extensions``: the user's consent to compile and run the C files a scene file
+    or scenario lists under ``extensions`` (the file must say ``allow_extensions: true``)."""
+    p.add_argument("--allow-extensions", action="store_true",
+                   help="let the file compile and run the C extensions it lists (it must say allow_extensions: true "
+                        "too); extensions run with your rights (docs/extensions.md)")

@@ -4,7 +4,8 @@ from __future__ import annotations
 import argparse
 
 from . import Command, register
-from .common import EXIT_DROPPED, EXIT_INTERRUPTED, add_scenario_overrides, positive_int, scenario_overrides
+from .common import (EXIT_DROPPED, EXIT_INTERRUPTED, add_extension_option, add_scenario_overrides, positive_int,
+                     scenario_overrides)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -20,6 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="replace a worker process after N frames (default 200)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_scenario_overrides(p)
+    add_extension_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -27,7 +29,8 @@ def run(args: argparse.Namespace) -> int:
 
     summary = run_scenario(args.scenario, args.output, count=args.count, workers=args.workers,
                            scheduler=args.scheduler, resume=args.resume, only=args.only, recycle=args.recycle,
-                           progress=not args.no_progress, overrides=scenario_overrides(args))
+                           progress=not args.no_progress, overrides=scenario_overrides(args),
+                           allow_extensions=args.allow_extensions)
     print(summary.text(debug=getattr(args, "debug", False)))
     if summary["interrupted"]:
         return EXIT_INTERRUPTED

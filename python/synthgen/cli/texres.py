@@ -4,7 +4,7 @@ from __future__ import annotations
 import argparse
 
 from . import Command, register
-from .common import nonnegative_int, positive_int
+from .common import add_extension_option, nonnegative_int, positive_int
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -15,6 +15,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-depth", type=nonnegative_int, default=4, metavar="D",
                    help="sharp reflections and refractions followed after the camera hit (default 4)")
     p.add_argument("--threads", type=positive_int, default=None, metavar="T", help="threads (default: all cores)")
+    add_extension_option(p)
 
 
 def scene_kind(data: object) -> str:
@@ -36,13 +37,13 @@ def run(args: argparse.Namespace) -> int:
     if scene_kind(read_yaml(args.file)) == "scene":
         from ..scene.scene_file import load_scene
 
-        scene = load_scene(args.file)[0]
+        scene = load_scene(args.file, allow_extensions=args.allow_extensions)[0]
         what = args.file
     else:
         from ..frame.renderer import FrameRenderer
         from ..scenario import check_inputs, load_scenario
 
-        sc = load_scenario(args.file)
+        sc = load_scenario(args.file, allow_extensions=args.allow_extensions)
         check_inputs(sc)
         fr = FrameRenderer(sc, threads=threads)
         fr.prepare(args.frame)

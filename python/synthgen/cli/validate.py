@@ -4,18 +4,19 @@ from __future__ import annotations
 import argparse
 
 from . import Command, register
-from .common import add_scenario_overrides, scenario_overrides
+from .common import add_extension_option, add_scenario_overrides, scenario_overrides
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", metavar="SCENARIO.yaml")
     add_scenario_overrides(p)
+    add_extension_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
     from ..scenario import check_inputs, load_scenario
 
-    sc = load_scenario(args.scenario, scenario_overrides(args))
+    sc = load_scenario(args.scenario, scenario_overrides(args), allow_extensions=args.allow_extensions)
     checked = check_inputs(sc)
     plural = {"mesh": "meshes", "environment map": "environment maps"}
 

@@ -24,13 +24,15 @@ __all__ = ["Scenario"]
 class Scenario:
     """A validated scenario file whose frames render in memory (one scene kept across
     frames, as a worker of ``synthgen run`` does). ``overrides``: (key path, value) pairs set
-    before validation, as ``synthgen run --set``; ``threads``: render threads (0: all)."""
+    before validation, as ``synthgen run --set``; ``threads``: render threads (0: all);
+    ``allow_extensions``: consent to compile and run the scenario's C extensions (which it must
+    allow itself too: docs/extensions.md)."""
 
     def __init__(self, path: str | os.PathLike, overrides: Sequence[Tuple[str, Any]] = (), threads: int = 0,
-                 check_inputs: bool = True):
+                 check_inputs: bool = True, allow_extensions: bool = False):
         from ..scenario import check_inputs as check, load_scenario
 
-        self.spec = load_scenario(path, overrides)
+        self.spec = load_scenario(path, overrides, allow_extensions)
         if check_inputs:
             check(self.spec)
         self._threads = int(threads)

@@ -104,6 +104,12 @@ class FrameRenderer:
         self.sc = scenario
         self.threads = int(threads)
         self.scene = Scene()
+        for path in scenario.spec["extensions"]:
+            # Consented to when the scenario was loaded (allow_extensions in the file and by the
+            # caller); a worker process loads the libraries again (compiled once, cached).
+            from ..scene.extensions import load_extension
+
+            load_extension(path, scene=self.scene)
         self.shapes = Shapes(self.scene)
         self.pool = Pool()                # object instances, id k for the frame's object k
         self.decor = Pool()               # unlabelled posts and poles below signs and plates

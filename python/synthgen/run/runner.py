@@ -80,10 +80,11 @@ class RunSummary(dict):
 def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: int = 1,
         scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
         recycle: int = 200, progress: bool = True, threads: Optional[int] = None,
-        overrides: Sequence[Tuple[str, Any]] = ()) -> RunSummary:
+        overrides: Sequence[Tuple[str, Any]] = (), allow_extensions: bool = False) -> RunSummary:
     """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`); ``overrides``:
-    (key path, value) pairs set in the scenario before validation (``--set``)."""
-    sc = load_scenario(scenario_path, overrides)  # validate before anything renders ...
+    (key path, value) pairs set in the scenario before validation (``--set``);
+    ``allow_extensions``: consent to compile and run the scenario's C extensions."""
+    sc = load_scenario(scenario_path, overrides, allow_extensions)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once
     n = int(count) if count is not None else sc.count
     if scheduler is None:  # local workers share this machine's memory

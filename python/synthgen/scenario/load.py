@@ -195,9 +195,16 @@ def support_of(spec: Validated, ctx: Optional[ValidationContext] = None) -> List
     return out
 
 
-def parse_scenario(data: Any, source: str = "<scenario>", base_dir: Optional[str] = None, text: str = "") -> Scenario:
-    """Validates a scenario tree (from :func:`synthgen.schema.read_yaml`)."""
+def parse_scenario(data: Any, source: str = "<scenario>", base_dir: Optional[str] = None, text: str = "",
+                   allow_extensions: bool = False) -> Scenario:
+    """Validates a scenario tree (from :func:`synthgen.schema.read_yaml`). ``allow_extensions``:
+    the caller's consent to compile and run the C files under ``extensions`` (the scenario must
+    say ``allow_extensions: true`` too; docs/extensions.md)."""
     ctx = ValidationContext(source, base_dir)
+    if isinstance(data, dict) and data.get("extensions"):
+        from ..scene.scene_file import load_file_extensions
+
+        load_file_extensions(data, SCENARIO_SCHEMA, ctx, allow_extensions)
     spec = SCENARIO_SCHEMA.validate(data, Loc.root(data), ctx)
     _check(spec, ctx)
     return Scenario(spec, source, ctx.base_dir, text or json.dumps(D.plain(spec), sort_keys=True))
@@ -260,21 +267,22 @@ def apply_overrides(data: Any, overrides: Sequence[Tuple[str, Any]], source: str
     return data
 
 
-def load_scenario(path: str | os.PathLike, overrides: Sequence[Tuple[str, Any]] = ()) -> Scenario:
+def load_scenario(path: str | os.PathLike, overrides: Sequence[Tuple[str, Any]] = (),
+                  allow_extensions: bool = False) -> Scenario:
     """Reads and validates a scenario file; raises :class:`SceneFileError` (file:line:col).
 
     ``overrides``: (key path, value) pairs set before validation, e.g. ``("render.spp", 64)``
     (the command line's ``--set``, ``--spp``, ``--resolution``); they are part of the scenario
-    (its hash, the run manifest)."""
+    (its hash, the run manifest). ``allow_extensions``: see :func:`parse_scenario`."""
     path = os.fspath(path)
     text = read_text(path, what="scenario")
     data = parse_yaml(text, path)
     if not overrides:
-        return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text)
+        return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text, allow_extensions)
     data = apply_overrides(data, overrides, path)
     text += "".join(f"\n# --set {k}={json.dumps(D.plain(v), sort_keys=True)}" for k, v in overrides)
     try:
-        return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text)
+        return parse_scenario(data, path, os.path.dirname(os.path.abspath(path)), text, allow_extensions)
     except SceneFileError as e:
         # An error in a value from the command line names the option, not a line of the file.
         for k, _ in reversed(list(overrides)):

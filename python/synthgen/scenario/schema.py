@@ -214,6 +214,11 @@ SCENARIO_SCHEMA = Record(
      "description": String("", doc="free text"),
      "seed": Integer(0, min=0, max=(1 << 63) - 1, doc="scenario seed"),
      "count": Integer(10, min=1, max=10 ** 9, doc="number of frames"),
+     "allow_extensions": Bool(False, doc="this scenario may compile and run the C files under 'extensions' (with "
+                                         "--allow-extensions on the command line too: extensions run with your "
+                                         "rights)"),
+     "extensions": ListOf(FilePath(doc="a C file"), [], doc="user extensions (C files, synthgen_ext.h) whose "
+                                                            "textures the materials use; docs/extensions.md"),
      "resolution": _Resolution((640, 480), doc="image size"),
      "camera": CAMERA,
      "lights": R(ListOf(LIGHT, REQUIRED, min_items=1), doc="lights, or a choice of light set-ups",

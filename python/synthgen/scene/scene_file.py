@@ -27,6 +27,9 @@ A scene file is a YAML mapping::
         rotate: {axis: [0, 1, 0], angle: 30}
       - mesh: {file: meshes/bunny.obj}           # OBJ / PLY / glTF / GLB
         class_id: 2
+      - shape: {type: torus, major_radius: 1}    # a shape of an extension (below)
+    allow_extensions: true         # with --allow-extensions: compile and run ...
+    extensions: [shapes.c]         # ... these C files (docs/extensions.md)
     lights:
       - {type: sun, direction: [0.3, 1, 0.2], irradiance: 3}
     render: {spp: 64, max_depth: 8}
@@ -50,8 +53,8 @@ import numpy as np
 from .._core import PinholeCamera, Scene, TextureRef
 from ..schema import limits
 from ..schema.errors import Loc, ValidationContext, suggest
-from ..schema.fields import (EMPTY, Choice, FilePath, Integer, ListOf, MapOf, MaterialName, Matrix4, Number, Record,
-                             String, TextureName, Validated, Vector)
+from ..schema.fields import (EMPTY, Bool, Choice, FilePath, Integer, ListOf, MapOf, MaterialName, Matrix4, Number,
+                             Record, String, TextureName, Validated, Vector)
 from ..schema.plugins import given_params, plugin_record, settings_record
 from ..schema.reference import format_schema as _format_schema
 from ..schema.yaml_io import read_yaml
@@ -85,6 +88,8 @@ LIGHT = plugin_record("light", fields={"name": String(None, doc="free name, repo
                       doc="light (area lights come from emissive materials)")
 MEDIUM = plugin_record("medium", default=None, doc="the participating medium filling the scene (fog, haze; "
                                                     "docs/weather.md)")
+SHAPE = plugin_record("shape", default=None,
+                      doc="a shape of a loaded extension (its name and parameters; docs/extensions.md)")
 RENDER = settings_record("render", "path_tracer", default=EMPTY, doc="render settings (keyword arguments of "
                                                                     "Scene.render)")
 
@@ -112,6 +117,7 @@ MESH_FILE = Record({
 OBJECT = Record({
     "name": String(None, doc="free name, reported in meta.json"),
     "mesh": MESH_FILE,
+    "shape": SHAPE,
     "primitive": Choice(["sphere", "box", "cylinder", "cone", "plane", "ground"], doc="built-in procedural mesh"),
     "class_id": Integer(min=0, max=_ID_MAX, doc="semantic class label (0 is also the background)"),
     "instance_id": Integer(None, min=1, max=_ID_MAX, doc="instance label (default: instance handle + 1)"),
@@ -150,13 +156,18 @@ OBJECT = Record({
                          doc="the y = 0 plane out to this distance in metres (the default reaches the horizon); "
                              "uv = (x, z) in metres"),
     },
-}, doc="an instance of a mesh file or primitive",
-    one_of=[("mesh", "primitive")],
+}, doc="an instance of a mesh file, primitive or extension shape",
+    one_of=[("mesh", "primitive", "shape")],
     exclusive=[(("translate", "rotate", "scale"), ("world_from_object",))])
 
 SCENE_SCHEMA = Record({
     "version": Integer(1, min=1, max=1, doc="scene file format version"),
     "description": String(None, doc="free text"),
+    "allow_extensions": Bool(False, doc="this file may compile and run the C files under 'extensions' (with "
+                                           "--allow-extensions on the command line too: extensions run with your "
+                                           "rights)"),
+    "extensions": ListOf(FilePath(doc="a C file"), [], doc="user extensions (C files, synthgen_ext.h) whose textures "
+                                                           "and shapes the file uses; docs/extensions.md"),
     "camera": CAMERA,
     "textures": MapOf(TEXTURE, {}, doc="named textures"),
     "materials": MapOf(MATERIAL, {}, doc="named materials"),
@@ -325,6 +336,14 @@ def build_validated(spec: Validated, ctx: ValidationContext) -> Tuple[Scene, Dic
                     mesh_cache[key] = dict(scene.load_mesh_file(path))
             info["mesh"] = path
             instance_from_object = np.eye(4)
+        elif obj.get("shape") is not None:
+            params = given_params(obj["shape"])
+            key = ("shape", obj["shape"]["type"], repr(sorted(params.items())))
+            if key not in mesh_cache:
+                with ctx.core(obj.locs["shape"]):
+                    mesh_cache[key] = {"mesh_id": scene.add_shape(obj["shape"]["type"], params)}
+            info["shape"] = obj["shape"]["type"]
+            instance_from_object = np.eye(4)
         else:
             key, arrays, size = _primitive_mesh(obj)
             if key not in mesh_cache:
@@ -374,18 +393,50 @@ def validate_render_settings(settings: Mapping[str, Any], source: str = "<render
 
 
 def validate_scene(data: Any, source_name: str = "<scene>", base_dir: Optional[str] = None,
-                   context: Optional[ValidationContext] = None) -> Tuple[Validated, ValidationContext]:
+                   context: Optional[ValidationContext] = None,
+                   allow_extensions: bool = False) -> Tuple[Validated, ValidationContext]:
     """Validates a scene description (a dict, e.g. from :func:`read_yaml`) against
     :data:`SCENE_SCHEMA`; returns ``(spec, context)``."""
     ctx = context or ValidationContext(source_name, base_dir)
     if data is None:
         ctx.error(Loc(), "the scene file is empty; expected a mapping with at least 'camera' and 'objects'")
+    if isinstance(data, Mapping) and data.get("extensions"):
+        load_file_extensions(data, SCENE_SCHEMA, ctx, allow_extensions)
     spec = SCENE_SCHEMA.validate(data, Loc.root(data), ctx)
     return spec, ctx
 
 
+def load_file_extensions(data: Mapping[str, Any], schema: Record, ctx: ValidationContext,
+                         allow_extensions: bool) -> List[Dict[str, Any]]:
+    """Compiles and loads the ``extensions`` of a scene file or scenario (before the rest is
+    validated: their textures and shapes are plugins the rest may use) -- only when the file
+    says ``allow_extensions: true`` and the caller allows it too (``--allow-extensions``, or the
+    Python argument): extensions run with your rights. Errors point at the file's entries."""
+    from .extensions import NOT_ALLOWED, load_extension
+
+    root = Loc.root(data)
+    allowed = False
+    if "allow_extensions" in data:
+        allowed = schema.fields["allow_extensions"].validate(data["allow_extensions"],
+                                                             root.value("allow_extensions", data), ctx)
+    paths = schema.fields["extensions"].validate(data["extensions"], root.value("extensions", data), ctx)
+    names = ", ".join(os.path.basename(p) for p in paths)
+    if not allowed:
+        ctx.error(root.key("extensions", data), NOT_ALLOWED.format(what=names) + " (the file lacks 'allow_extensions: "
+                                                                               "true')")
+    if not allow_extensions:
+        ctx.error(root.key("extensions", data), NOT_ALLOWED.format(what=names) + " (the command line lacks "
+                                                                               "--allow-extensions)")
+    loaded = []
+    for i, path in enumerate(paths):
+        with ctx.core(root.value("extensions", data).value(i, data["extensions"])):
+            loaded.append(load_extension(path))
+    return loaded
+
+
 def build_scene(data: Mapping[str, Any], source_name: str = "<scene>", base_dir: Optional[str] = None,
-                context: Optional[ValidationContext] = None) -> Tuple[Scene, Dict[str, Any], Dict[str, Any]]:
+                context: Optional[ValidationContext] = None,
+                allow_extensions: bool = False) -> Tuple[Scene, Dict[str, Any], Dict[str, Any]]:
     """Validates a scene description (dict in the scene file format) and builds it.
 
     ``source_name`` names the description in error messages; relative file paths are
@@ -394,20 +445,24 @@ def build_scene(data: Mapping[str, Any], source_name: str = "<scene>", base_dir:
     ``Scene.render``; ``meta`` lists the ids given to named textures and materials and,
     per object, its instance handle, labels, mesh id and world_from_object.
     """
-    spec, ctx = validate_scene(data, source_name, base_dir, context)
+    spec, ctx = validate_scene(data, source_name, base_dir, context, allow_extensions)
     return build_validated(spec, ctx)
 
 
-def load_scene(path: str | os.PathLike) -> Tuple[Scene, Dict[str, Any], Dict[str, Any]]:
+def load_scene(path: str | os.PathLike,
+               allow_extensions: bool = False) -> Tuple[Scene, Dict[str, Any], Dict[str, Any]]:
     """Loads a YAML scene file: ``(scene, render_settings, meta)``.
 
     ``scene`` has its camera set; ``scene.render(**render_settings)`` renders it.
     Raises :class:`SceneFileError` (``FILE:LINE:COLUMN: key.path: reason``) on any
-    problem in the file or in the files it references.
+    problem in the file or in the files it references. ``allow_extensions``: the caller's
+    consent to compile and run the C files the scene file lists under ``extensions`` (the file
+    must say ``allow_extensions: true`` too; docs/extensions.md).
     """
     path = os.fspath(path)
     data = read_yaml(path)
-    scene, settings, meta = build_scene(data, source_name=path, base_dir=os.path.dirname(os.path.abspath(path)))
+    scene, settings, meta = build_scene(data, source_name=path, base_dir=os.path.dirname(os.path.abspath(path)),
+                                        allow_extensions=allow_extensions)
     with open(path, "rb") as f:
         meta["source_sha256"] = hashlib.sha256(f.read()).hexdigest()
     return scene, settings, meta

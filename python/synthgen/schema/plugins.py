@@ -28,8 +28,8 @@ from .errors import Loc, ValidationContext, show_value
 from .fields import (REQUIRED, Bool, Choice, ColorOrTexture, Field, FilePath, Integer, Matrix4, MaterialRef, Number,
                      NumberList, Record, ScalarOrTexture, String, TextureRefField, Vector)
 
-__all__ = ["plugin_info", "plugin_names", "param_field", "plugin_record", "settings_record", "given_params",
-           "REFERENCE_TYPES"]
+__all__ = ["plugin_info", "plugin_names", "param_field", "plugin_record", "refresh_runtime_plugins",
+           "settings_record", "given_params", "REFERENCE_TYPES"]
 
 #: Parameter types that refer to other library objects (in scenarios textures are written
 #: inline, materials have no form).
@@ -220,7 +220,34 @@ def plugin_record(kind: str, *, scenario: bool = False, names: Optional[Iterable
     variants = {i["name"]: _params_record(i, scenario) for i in infos}
     base = {"type": Choice([i["name"] for i in infos], doc=f"{kind} plugin")}
     base.update(fields or {})
-    return Record(base, tag="type", variants=variants, doc=doc or kind, default=default)
+    rec = Record(base, tag="type", variants=variants, doc=doc or kind, default=default)
+    if names is None:
+        _RECORDS.append((rec, kind, scenario))
+    return rec
+
+
+#: The records of all plugins of a kind made by plugin_record: refresh_runtime_plugins() adds
+#: the plugins that user extensions register later.
+_RECORDS: List[Tuple[Record, str, bool]] = []
+
+
+def refresh_runtime_plugins() -> None:
+    """Makes the plugins registered at run time (user extensions' textures and shapes,
+    synthgen.scene.extensions) known to the schemas: every record of a whole plugin kind
+    gains (or renews) their variants, and the scenario texture form is rebuilt."""
+    _info.cache_clear()
+    for rec, kind, scenario in _RECORDS:
+        choice = rec.fields["type"]
+        for name in plugin_names(kind):
+            info = plugin_info(kind, name)
+            if name in rec.variants and not info["file"].endswith(".c"):
+                continue  # built-in (run-time plugins are declared in their C file)
+            if not _usable(info, scenario):
+                continue
+            rec.variants[name] = _params_record(info, scenario)
+            if name not in choice.choices:
+                choice.choices.append(name)
+    _TEXTURE_RECORD.clear()
 
 
 def settings_record(kind: str, name: str, *, scenario: bool = False, keys: Optional[Sequence[str]] = None,

@@ -1,0 +1,323 @@
+"""User extensions in C (synthgen.scene.extensions, synthgen_ext.h): the rust preset as an
+extension against the built-in one, shapes' exact labels against analytic intersections,
+and bad extensions' errors."""
+from __future__ import annotations
+
+import os
+import textwrap
+
+import numpy as np
+import pytest
+
+import synthgen as sg
+from synthgen import primitives as P, wear
+from synthgen.scene import extensions, wear_ext
+from synthgen.scene.extensions import ExtensionError
+
+HEADER = "#include <synthgen_ext.h>\n#include <math.h>\n"
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path_factory, monkeypatch):
+    # Every test compiles into a fresh cache (and never into the user's).
+    monkeypatch.setenv("SYNTHGEN_CACHE", str(tmp_path_factory.mktemp("cache")))
+
+
+def _psnr(a: np.ndarray, b: np.ndarray) -> float:
+    mse = float(np.mean((a.astype(np.float64) - b.astype(np.float64)) ** 2))
+    peak = float(max(a.max(), b.max()))
+    return float("inf") if mse == 0.0 else 10.0 * np.log10(peak * peak / mse)
+
+
+def _rust_scene(preset, width=160, height=120):
+    s = sg.Scene()
+    g = P.plane(20.0, 20.0)
+    s.add_instance(s.add_mesh(g["positions"], g["indices"], normals=g["normals"]), np.eye(4),
+                   material_id=s.add_material("diffuse", {"albedo": 0.3}))
+    b = P.box((1.8, 1.2, 3.0))
+    grey = s.add_material("principled", {"base_color": [0.5, 0.5, 0.55], "roughness": 0.4})
+    mat = preset(s, grey, seed=5, amount=0.4)
+    s.add_instance(s.add_mesh(b["positions"], b["indices"], normals=b["normals"]),
+                   P.translate([0.0, 0.6, 0.0]) @ P.rotate([0, 1, 0], 35.0), class_id=1, material_id=mat)
+    s.add_light("sky", {"elevation": 40.0, "azimuth": 130.0, "turbidity": 3.0, "strength": 0.02})
+    pose = sg.PinholeCamera.look_at((2.6, 2.0, -3.8), (0.0, 0.6, 0.0), (0.0, 1.0, 0.0))
+    s.set_camera(sg.PinholeCamera.from_fov(40.0, width, height, pose))
+    return s
+
+
+def test_rust_extension_matches_the_builtin_preset():
+    a = _rust_scene(wear.rust).render(spp=8, max_depth=5, seed=3).rgb
+    b = _rust_scene(wear_ext.rust).render(spp=8, max_depth=5, seed=3).rgb
+    psnr = _psnr(a, b)
+    print(f"PSNR of the extension rust against the built-in: {psnr:.2f} dB")
+    assert psnr >= 50.0
+    # The rust is there: the box is not the plain grey of its base.
+    plain = _rust_scene(lambda s, base, **k: base).render(spp=8, max_depth=5, seed=3).rgb
+    assert _psnr(plain, b) < 35.0
+
+
+def test_extension_arguments_change_without_recompiling():
+    s = sg.Scene()
+    first = s.load_extension(extensions.example("rust"))
+    assert not first["cached"] and first["textures"] == ["rust_mask", "rust_color", "rust_bump"]
+    pts = np.random.default_rng(0).random((256, 3)).astype(np.float32)
+    v = [s.texture_values(s.add_texture("rust_mask", {"seed": seed}), pts)[:, 0] for seed in (1, 2)]
+    assert not np.allclose(v[0], v[1])
+    again = s.load_extension(extensions.example("rust"))
+    assert again["cached"] and again["library"] == first["library"]
+    assert len([x for x in extensions.loaded_extensions() if x["library"] == first["library"]]) == 1
+    # Declared parameters are checked like any plugin's.
+    with pytest.raises(sg.SynthgenError, match=r"did you mean 'seed'"):
+        s.add_texture("rust_mask", {"sead": 1})
+    with pytest.raises(sg.SynthgenError, match=r"bottom_bias"):
+        s.add_texture("rust_mask", {"bottom_bias": 9.0})
+
+
+# ---- shapes: exact labels -------------------------------------------------------------------
+
+W, H, FX, FY, CX, CY = 128, 96, 150.0, 150.0, 61.7, 49.2
+
+
+def _camera():
+    wfc = sg.PinholeCamera.look_at((0.4, 1.1, -3.4), (0.0, 0.2, 0.0), (0.0, 1.0, 0.0))
+    return sg.PinholeCamera(fx=FX, fy=FY, cx=CX, cy=CY, width=W, height=H, world_from_camera=wfc)
+
+
+def _rays(cam, world_from_object):
+    """Per pixel centre: object-space origin, unit world direction's object-space image (not
+    unit: the instance scales) and the z of the world direction in camera space (depth per t)."""
+    m = np.asarray(cam.world_from_camera, dtype=np.float64)
+    j, i = np.mgrid[0:H, 0:W].astype(np.float64)
+    d_cam = np.stack([(i + 0.5 - CX) / FX, (j + 0.5 - CY) / FY, np.ones_like(i)], axis=-1)
+    d_cam /= np.linalg.norm(d_cam, axis=-1, keepdims=True)
+    d_world = d_cam @ m[:3, :3].T
+    inv = np.linalg.inv(np.asarray(world_from_object, dtype=np.float64))
+    o = inv[:3, :3] @ m[:3, 3] + inv[:3, 3]
+    return o, d_world @ inv[:3, :3].T, d_cam[..., 2]
+
+
+def _march(sdf, o, d, t_max=20.0, tol=1e-12):
+    """Float64 sphere tracing of every ray; inf where it misses."""
+    t = np.zeros(d.shape[:-1])
+    dl = np.linalg.norm(d, axis=-1)
+    live = np.ones(t.shape, bool)
+    hit = np.zeros(t.shape, bool)
+    for _ in range(20000):
+        if not live.any():
+            break
+        dist = sdf(o + t[live][:, None] * d[live])
+        done = dist < tol
+        idx = np.flatnonzero(live)
+        hit[idx[done]] = True
+        t[idx[~done]] += dist[~done] / dl[live][~done]
+        live[idx[done]] = False
+        live[live] = t[live] < t_max
+    return np.where(hit, t, np.inf)
+
+
+def _torus(R, r):
+    return lambda p: np.hypot(np.hypot(p[:, 0], p[:, 2]) - R, p[:, 1]) - r
+
+
+def _rounded_box(size, rad):
+    half = 0.5 * np.asarray(size) - rad
+
+    def f(p):
+        q = np.abs(p) - half
+        return np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0) - rad
+    return f
+
+
+def _sphere(radius):
+    return lambda p: np.linalg.norm(p, axis=1) - radius
+
+
+SHAPES = [
+    ("ext_sphere", {"radius": 0.5}, _sphere, (0.5,), 1.0),
+    ("torus", {"major_radius": 0.6, "minor_radius": 0.2}, _torus, (0.6, 0.2), 1.6),
+    ("rounded_box", {"size": [1.2, 0.7, 0.9], "radius": 0.15}, _rounded_box, ((1.2, 0.7, 0.9), 0.15), 1.2),
+]
+
+
+def _grown(make, args, delta):
+    """The shape's surface moved outwards by delta (an offset surface of a distance field)."""
+    f = make(*args)
+    return lambda p: f(p) - delta
+
+
+@pytest.mark.parametrize("name,params,make,args,size", SHAPES, ids=[s[0] for s in SHAPES])
+def test_shape_labels_are_exact(name, params, make, args, size):
+    s = sg.Scene()
+    s.load_extension(extensions.example("shapes"))
+    # A rotated, translated and scaled instance: the shape sees object-space rays of non-unit
+    # direction, as Embree hands them to user geometry.
+    wfo = P.translate([0.1, 0.3, 0.2]) @ P.rotate([1, 0.3, 0], 50.0) @ P.scale(1.3)
+    s.add_instance(s.add_shape(name, params), wfo, class_id=3, instance_id=77)
+    cam = _camera()
+    s.set_camera(cam)
+    r = s.render(spp=1, labels_only=True)
+    o, d, zc = _rays(cam, wfo)
+    flat = d.reshape(-1, 3)
+    delta = 2e-5 * size  # the shape's accuracy (sphere tracing's stop, float32), object units
+    t_in = _march(_grown(make, args, -delta), o, flat).reshape(H, W)
+    t_out = _march(_grown(make, args, delta), o, flat).reshape(H, W)
+    t_exact = _march(make(*args), o, flat).reshape(H, W)
+    inside, outside = np.isfinite(t_in), ~np.isfinite(t_out)
+    mask = r.instance_id == 77
+    assert inside.sum() > 800 and outside.sum() > 2000
+    assert np.all(mask[inside]), f"{(~mask[inside]).sum()} pixels that surely hit are not labelled"
+    assert not np.any(mask[outside]), f"{mask[outside].sum()} pixels that surely miss are labelled"
+    assert (mask != np.isfinite(t_exact)).sum() <= 3  # only rays grazing within delta may differ
+    np.testing.assert_array_equal(r.class_id[mask], 3)
+    # Depth: between the entries of the inner and outer offset surfaces, and at the surface to
+    # 1e-5 of the shape's size (t is in world units: the unit world direction's parameter).
+    both = inside & mask
+    dist = r.distance[both].astype(np.float64)
+    assert np.all(dist >= t_out[both] * (1 - 1e-6)) and np.all(dist <= t_in[both] * (1 + 1e-6))
+    err = np.abs(dist - t_exact[both])
+    print(f"{name}: {both.sum()} pixels, depth error median {np.median(err):.2e} m, max {err.max():.2e} m")
+    assert np.median(err) < 1e-5 * size
+    np.testing.assert_allclose(r.depth[both], r.distance[both] * zc[both], rtol=1e-5)
+
+
+def test_shapes_cast_shadows_and_render():
+    s = sg.Scene()
+    s.load_extension(extensions.example("shapes"))
+    g = P.plane(10.0, 10.0)
+    s.add_instance(s.add_mesh(g["positions"], g["indices"], normals=g["normals"]), np.eye(4),
+                   material_id=s.add_material("diffuse", {"albedo": 0.5}))
+    s.add_light("sun", {"direction": [0.0, 1.0, 0.0], "irradiance": 3.0})
+    cam = sg.PinholeCamera.look_at((0.0, 3.0, -0.01), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    s.set_camera(sg.PinholeCamera.from_fov(40.0, 64, 64, cam))
+    lit = s.render(spp=4, max_depth=2, seed=1).rgb.mean()
+    # A torus hovering above the ground under an overhead sun: its ring of shadow darkens the
+    # ground, and through the hole the sun still reaches it.
+    s.add_instance(s.add_shape("torus", {"major_radius": 0.5, "minor_radius": 0.15}), P.translate([0, 1.0, 0]))
+    r = s.render(spp=4, max_depth=2, seed=1)
+    ground = r.instance_id == 1
+    assert ground[32, 32], "the ground is seen through the torus' hole"
+    assert r.rgb[32, 32].mean() == pytest.approx(lit, rel=0.2)
+    assert r.rgb[ground].mean() < 0.9 * lit
+
+
+# ---- bad extensions ---------------------------------------------------------------------------
+
+
+def _write(tmp_path, name, body) -> str:
+    p = tmp_path / name
+    p.write_text(HEADER + textwrap.dedent(body))
+    return str(p)
+
+
+GOOD_TEX = """
+static void f(const sg_ext_point* q, const float* a, const sg_ext_host* h, float* out) { out[0] = %s; }
+static const sg_ext_texture tex[] = {{"%s", "doc", %d, 0, 0, 0, f, 0}};
+SG_EXT_EXPORT const sg_ext_library* synthgen_extension(void) {
+  static const sg_ext_library lib = {%s, tex, 1, 0, 0};
+  return &lib;
+}
+"""
+
+
+def test_syntax_error_names_file_and_line(tmp_path):
+    path = _write(tmp_path, "broken.c", "static int f(void) { return 1 }\n")
+    with pytest.raises(ExtensionError, match=r"broken\.c:3:\d+: error") as e:
+        sg.Scene().load_extension(path)
+    assert "does not compile" in str(e.value)
+
+
+def test_missing_entry_symbol(tmp_path):
+    path = _write(tmp_path, "nosym.c", "int unrelated(void) { return 2; }\n")
+    with pytest.raises(ExtensionError, match=r"nosym\.c: no function 'synthgen_extension'"):
+        sg.Scene().load_extension(path)
+
+
+def test_wrong_abi_version(tmp_path):
+    path = _write(tmp_path, "abi.c", GOOD_TEX % ("1.f", "abi_tex", 1, "99u"))
+    with pytest.raises(ExtensionError, match=r"abi\.c: built for extension ABI version 99; this synthgen has version 1"):
+        sg.Scene().load_extension(path)
+
+
+def test_bad_declarations(tmp_path):
+    with pytest.raises(ExtensionError, match=r"texture 'two': channels must be 1 or 3 \(is 2\)"):
+        sg.Scene().load_extension(_write(tmp_path, "ch.c", GOOD_TEX % ("1.f", "two", 2, "SG_EXT_ABI_VERSION")))
+    with pytest.raises(ExtensionError, match=r"'noise' has the name of a built-in texture"):
+        sg.Scene().load_extension(_write(tmp_path, "clash.c", GOOD_TEX % ("1.f", "noise", 1, "SG_EXT_ABI_VERSION")))
+    with pytest.raises(ExtensionError, match=r"name must match"):
+        sg.Scene().load_extension(_write(tmp_path, "nm.c", GOOD_TEX % ("1.f", "Bad-Name", 1, "SG_EXT_ABI_VERSION")))
+    assert "two" not in sg.plugin_names("texture") and "noise" in sg.plugin_names("texture")
+
+
+def test_undeclared_function_is_a_compile_error(tmp_path):
+    path = _write(tmp_path, "undecl.c", GOOD_TEX % ("not_a_function(q->p[0])", "undecl", 1, "SG_EXT_ABI_VERSION"))
+    with pytest.raises(ExtensionError, match=r"undecl\.c:\d+:\d+: error: implicit declaration"):
+        sg.Scene().load_extension(path)
+
+
+def test_nan_output_fails_the_render_naming_the_extension(tmp_path):
+    path = _write(tmp_path, "nan_tex.c", GOOD_TEX % ("q->p[0] < -0.5f ? NAN : 0.5f", "nan_tex", 1,
+                                                       "SG_EXT_ABI_VERSION"))
+    s = sg.Scene()
+    s.load_extension(path)
+    tex = s.add_texture("nan_tex")  # the average's points lie in [0, 16]^3: finite there
+    b = P.box((2.0, 2.0, 2.0))
+    s.add_instance(s.add_mesh(b["positions"], b["indices"], normals=b["normals"]), np.eye(4),
+                   material_id=s.add_material("diffuse", {"albedo": sg.TextureRef(tex)}))
+    s.add_light("sun", {"direction": [0.3, 1.0, -0.5], "irradiance": 2.0})
+    s.set_camera(sg.PinholeCamera.from_fov(40.0, 32, 32, sg.PinholeCamera.look_at((0, 1, -5), (0, 0, 0), (0, 1, 0))))
+    with pytest.raises(sg.SynthgenError, match=r"texture \d+: extension texture 'nan_tex' \(.*nan_tex\.c\): "
+                                               r"returned NaN \(channel 0\) at world point"):
+        s.render(spp=2, max_depth=2)
+
+
+def test_nan_at_creation_is_an_error(tmp_path):
+    path = _write(tmp_path, "nan_all.c", GOOD_TEX % ("NAN", "nan_all", 1, "SG_EXT_ABI_VERSION"))
+    s = sg.Scene()
+    s.load_extension(path)
+    with pytest.raises(sg.SynthgenError, match=r"nan_all.*returned NaN.*while estimating its average"):
+        s.add_texture("nan_all")
+
+
+def test_the_header_is_installed_with_the_package():
+    assert os.path.isfile(os.path.join(extensions.header_dir(), "synthgen_ext.h"))
+    assert sg._core.EXTENSION_ABI_VERSION == 1
+
+
+# ---- consent: scene files and scenarios -----------------------------------------------------
+
+SCENE = """
+version: 1
+{allow}
+extensions: [{path}]
+camera: {{width: 32, height: 24, fov_y: 40, look_at: {{eye: [0, 1, -4], target: [0, 0.5, 0]}}}}
+objects:
+  - shape: {{type: torus, major_radius: 0.5, minor_radius: 0.2}}
+    class_id: 1
+    translate: [0, 0.5, 0]
+lights: [{{type: sun, direction: [0, 1, 0], irradiance: 2}}]
+render: {{spp: 2}}
+"""
+
+
+def test_scene_files_compile_extensions_only_with_both_consents(tmp_path):
+    shapes = extensions.example("shapes")
+    denied = tmp_path / "denied.yaml"
+    denied.write_text(SCENE.format(allow="", path=shapes))
+    with pytest.raises(sg.SceneFileError, match=r"denied\.yaml:4:1: extensions: extensions run with your rights: "
+                                                r"compiling and running shapes\.c needs .*lacks 'allow_extensions"):
+        sg.load_scene(str(denied), allow_extensions=True)
+    allowed = tmp_path / "allowed.yaml"
+    allowed.write_text(SCENE.format(allow="allow_extensions: true", path=shapes))
+    with pytest.raises(sg.SceneFileError, match=r"lacks --allow-extensions"):
+        sg.load_scene(str(allowed))
+    scene, settings, meta = sg.load_scene(str(allowed), allow_extensions=True)
+    assert meta["objects"][0]["shape"] == "torus"
+    assert (scene.render(**settings).class_id == 1).sum() > 20
+
+
+def test_a_broken_extension_in_a_scene_file_points_at_its_entry(tmp_path):
+    bad = _write(tmp_path, "bad.c", "int x = ;\n")
+    f = tmp_path / "scene.yaml"
+    f.write_text(SCENE.format(allow="allow_extensions: true", path=bad))
+    with pytest.raises(sg.SceneFileError, match=r"(?s)scene\.yaml:4:\d+: extensions\[0\]: .*bad\.c:3:\d+: error"):
+        sg.load_scene(str(f), allow_extensions=True)
