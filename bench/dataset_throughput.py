@@ -3,11 +3,14 @@
 
 Renders scenarios/default.yaml at 640x480 with every output kind (sRGB PNG and linear EXR,
 depth EXR and 16-bit PNG, instance and semantic masks, COCO, YOLO, KITTI, metadata) with 1
-and with 2 worker processes, and prints frames/s and the mean seconds per stage (scene
-update, layout with label-only renders and amodal masks, path tracing, writing). The last
-line is ``frames_per_second=<float>``: the best configuration on this machine.
+and with 2 worker processes, then on a Dask LocalCluster of 2 worker processes (--dask 0: not),
+and prints frames/s, the mean seconds per stage (scene update, layout with label-only renders
+and amodal masks, path tracing, writing) and what travels to the workers: the scenario once
+per worker (``scenario_bytes``), per frame only the task (``task_bytes``: the function's
+reference, the frame number, options). The last lines are ``bytes_per_frame_to_workers=<int>``
+(the Dask run's task) and ``frames_per_second=<float>``: the best configuration on this machine.
 
-    .venv/bin/python bench/dataset_throughput.py [--frames 8] [--workers 1,2]
+    .venv/bin/python bench/dataset_throughput.py [--frames 8] [--workers 1,2] [--dask 2]
 """
 from __future__ import annotations
 
@@ -30,6 +33,7 @@ def main(argv=None) -> int:
     ap.add_argument("--frames", type=int, default=8, help="frames per configuration (default 8)")
     ap.add_argument("--workers", default="1,2", help="comma-separated worker counts (default 1,2)")
     ap.add_argument("--scenario", default=os.path.join(REPO, "scenarios", "default.yaml"))
+    ap.add_argument("--dask", type=int, default=2, help="Dask LocalCluster worker processes (0: no Dask run)")
     args = ap.parse_args(argv)
     with open(args.scenario) as f:
         spec = yaml.safe_load(f)
@@ -44,17 +48,33 @@ def main(argv=None) -> int:
               f"max_depth {spec['render']['max_depth']}, outputs: {', '.join(outputs.kind_names())}; "
               f"{args.frames} frames per run; {os.cpu_count()} cores")
         best = 0.0
-        for w in (int(x) for x in args.workers.split(",")):
-            out = os.path.join(tmp, f"out{w}")
-            s = runner.run(path, out, count=args.frames, workers=w, progress=False)
+        runs = [(f"workers={w}", dict(workers=w)) for w in (int(x) for x in args.workers.split(","))]
+        if args.dask > 0:
+            runs.append((f"dask_workers={args.dask}", None))
+        task_bytes = 0
+        for name, kw in runs:
+            out = os.path.join(tmp, name.replace("=", ""))
+            if kw is None:
+                from distributed import Client, LocalCluster
+
+                threads = max(1, (os.cpu_count() or 1) // args.dask)
+                with LocalCluster(n_workers=args.dask, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, Client(cluster) as client:
+                    s = runner.run(path, out, count=args.frames, scheduler=client, threads=threads, progress=False)
+                task_bytes = s["task_bytes"]
+            else:
+                s = runner.run(path, out, count=args.frames, progress=False, **kw)
             if s["failures"]:
                 print(s.text())
                 return 1
             st = s["stage_s"]
-            print(f"workers={w} frames={s['rendered']} wall_s={s['wall_s']:.2f} frames_per_s={s['frames_per_s']:.3f} "
+            print(f"{name} frames={s['rendered']} wall_s={s['wall_s']:.2f} frames_per_s={s['frames_per_s']:.3f} "
                   f"s_per_frame_per_worker={s['mean_s_per_frame']:.3f} stage_s: update={st['update_s']:.3f} "
-                  f"layout={st['layout_s']:.3f} render={st['render_s']:.3f} write={st['write_s']:.3f}")
+                  f"layout={st['layout_s']:.3f} render={st['render_s']:.3f} write={st['write_s']:.3f} "
+                  f"scenario_bytes={s['shared_bytes']} task_bytes={s['task_bytes']}")
             best = max(best, s["frames_per_s"])
+        if args.dask > 0:
+            print(f"bytes_per_frame_to_workers={task_bytes}")
         print(f"frames_per_second={best:.3f}")
         return 0
     finally:

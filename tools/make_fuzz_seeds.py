@@ -51,6 +51,34 @@ def scene_xml(tmp: str) -> None:
     put("fuzz_scene_xml", "xml-only", xml)
 
 
+def journal(tmp: str) -> None:
+    """A change journal (Scene.save_journal) with every kind of edit, for fuzz_journal."""
+    s = sg.Scene()
+    s.begin_journal()
+    box = s.add_mesh(**P.box((1, 1, 1)))
+    tex = s.add_image_texture(np.linspace(0, 1, 12, dtype=np.float32).reshape(2, 2, 3), {"wrap": "clamp"})
+    a = s.add_material("diffuse", {"albedo": sg.TextureRef(tex)})
+    b = s.add_material("conductor", {"metal": "gold", "roughness": 0.2})
+    i = s.add_instance(box, P.translate([0, 0.5, 0]), class_id=1, material_id=a)
+    j = s.add_instance(box, P.translate([2, 0.5, 0]), class_id=2)
+    s.set_instance_material_map(i, {-1: b})
+    light = s.add_light("sun", {"elevation": 40, "azimuth": 10})
+    s.set_camera(sg.PinholeCamera.from_fov(40, 32, 24, sg.PinholeCamera.look_at([0, 2, -5], [0, 0.5, 0])))
+    s.commit()
+    s.set_instance_visible(j, False)
+    s.set_instance_transform(i, P.translate([0, 0.6, 0]))
+    s.update_material(b, "conductor", {"metal": "copper"})
+    s.remove_light(light)
+    s.set_medium("homogeneous", {"visibility": 300.0})
+    s.commit()
+    path = os.path.join(tmp, "journal.xml")  # the name fuzz_journal writes (the sidecar is "journal.xml.bin")
+    s.save_journal(path)
+    xml = open(path, "rb").read()
+    binary = open(path + ".bin", "rb").read()
+    put("fuzz_journal", "journal", xml + b"\0BIN\0" + binary)
+    put("fuzz_journal", "xml-only", xml)
+
+
 def meshes() -> None:
     obj = b"mtllib none.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1\nf 2 4 3\n"
     put("fuzz_mesh_import", "tri.obj", bytes([0]) + obj)
@@ -107,6 +135,7 @@ def params() -> None:
 def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         scene_xml(tmp)
+        journal(tmp)
         meshes()
         images(tmp)
         params()

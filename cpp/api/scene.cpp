@@ -4,7 +4,6 @@
 #include <string>
 
 #include "core/error.h"
-#include "ext/extension.h"
 #include "film/film.h"
 #include "integrator/interaction.h"
 
@@ -38,22 +37,7 @@ uint32_t Scene::add_mesh(TriangleMesh mesh) {
   MeshEntry e;
   e.bounds = mesh_bounds(mesh);
   e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
-  m_meshes.emplace_back(std::move(e));
-  return id;
-}
-
-uint32_t Scene::add_shape(const std::string& type, const ParamSet& params) {
-  uint32_t id = uint32_t(m_meshes.size());
-  auto shape = Registry::instance().create<ExtensionShape>("shape", type, params, PluginContext{},
-                                                            "shape " + std::to_string(id));
-  TriangleMesh mesh;
-  mesh.name = type;
-  mesh.shape = shape;
-  MeshEntry e;
-  e.bounds = mesh_bounds(mesh);
-  e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
-  e.shape_type = type;
-  e.shape_params = params;
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddMesh, id)) o->mesh = e.mesh;
   m_meshes.emplace_back(std::move(e));
   return id;
 }
@@ -65,8 +49,10 @@ void Scene::update_mesh(uint32_t id, TriangleMesh mesh) {
     if (mid >= 0) check_material_id(mid, "mesh material_ids");
   e.bounds = mesh_bounds(mesh);
   e.mesh = std::make_shared<TriangleMesh>(std::move(mesh));
+  e.shape_type.clear();
   e.dirty = true;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::UpdateMesh, id)) o->mesh = e.mesh;
 }
 
 void Scene::remove_mesh(uint32_t id) {
@@ -77,6 +63,7 @@ void Scene::remove_mesh(uint32_t id) {
   m_accel->release_mesh(id);
   m_meshes[id].reset();
   m_structure_dirty = true;
+  journal_op(JournalOp::Kind::RemoveMesh, id);
 }
 
 const TriangleMesh& Scene::mesh(uint32_t id) const { return *get_slot(m_meshes, id, "mesh").mesh; }
@@ -90,6 +77,10 @@ uint32_t Scene::add_texture(const std::string& type, const ParamSet& params) {
   };
   auto t = create_texture(type, params, "texture " + std::to_string(id), &m_images, inputs);
   m_textures.emplace_back(TextureEntry{type, params, t, nullptr, false});
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddTexture, id)) {
+    o->type = type;
+    o->params = params;
+  }
   return id;
 }
 
@@ -110,7 +101,21 @@ uint32_t Scene::add_image_texture(std::shared_ptr<ImageData> pixels, bool intege
                   std::to_string(i / px.channels / px.width) + ") is not finite");
   ParamSet p = params;
   p.set("file", m_images.add_memory(pixels, integer_source));
-  uint32_t id = add_texture("image", p);
+  ++m_journal_muted;  // recorded below, as one operation with its pixels
+  uint32_t id;
+  try {
+    id = add_texture("image", p);
+  } catch (...) {
+    --m_journal_muted;
+    throw;
+  }
+  --m_journal_muted;
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddTexture, id)) {
+    o->type = "image";
+    o->params = params;
+    o->pixels = pixels;
+    o->flag = integer_source;
+  }
   m_textures[id]->pixels = std::move(pixels);
   m_textures[id]->pixels_integer = integer_source;
   return id;
@@ -159,6 +164,10 @@ uint32_t Scene::add_material(const std::string& type, const ParamSet& params) {
   m_materials.emplace_back(MaterialEntry{type, params, m, deps});
   assign_ao(*m_materials.back());
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddMaterial, id)) {
+    o->type = type;
+    o->params = params;
+  }
   return id;
 }
 
@@ -193,6 +202,10 @@ void Scene::update_material(uint32_t id, const std::string& type, const ParamSet
     changed[j] = true;
   }
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::UpdateMaterial, id)) {
+    o->type = type;
+    o->params = params;
+  }
 }
 
 void Scene::check_material_id(int64_t id, const char* context) const {
@@ -216,6 +229,13 @@ uint32_t Scene::add_instance(uint32_t mesh_id, const Transform& world_from_objec
   e.material_id = material_id;
   m_instances.emplace_back(e);
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddInstance, id)) {
+    o->a = mesh_id;
+    o->transform = world_from_object;
+    o->b = class_id;
+    o->counts = {e.instance_id};
+    o->material = material_id;
+  }
   return id;
 }
 
@@ -224,6 +244,7 @@ void Scene::set_instance_transform(uint32_t id, const Transform& t) {
   e.world_from_object = t;
   e.dirty = true;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceTransform, id)) o->transform = t;
 }
 
 void Scene::set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instance_id) {
@@ -231,6 +252,10 @@ void Scene::set_instance_labels(uint32_t id, uint32_t class_id, uint32_t instanc
   e.class_id = class_id;
   e.instance_id = instance_id;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceLabels, id)) {
+    o->a = class_id;
+    o->b = instance_id;
+  }
 }
 
 void Scene::set_instance_mesh(uint32_t id, uint32_t mesh_id) {
@@ -240,6 +265,7 @@ void Scene::set_instance_mesh(uint32_t id, uint32_t mesh_id) {
   e.mesh_id = mesh_id;
   e.dirty = true;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceMesh, id)) o->a = mesh_id;
 }
 
 void Scene::set_instance_material(uint32_t id, int64_t material_id) {
@@ -247,6 +273,7 @@ void Scene::set_instance_material(uint32_t id, int64_t material_id) {
   check_material_id(material_id, "set_instance_material");
   e.material_id = material_id;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceMaterial, id)) o->material = material_id;
 }
 
 void Scene::set_instance_material_map(uint32_t id, const std::vector<std::pair<int32_t, int64_t>>& map) {
@@ -260,6 +287,7 @@ void Scene::set_instance_material_map(uint32_t id, const std::vector<std::pair<i
   }
   e.material_map = map;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceMaterialMap, id)) o->pairs = map;
 }
 
 const std::vector<std::pair<int32_t, int64_t>>& Scene::instance_material_map(uint32_t id) const {
@@ -271,6 +299,7 @@ void Scene::remove_instance(uint32_t id) {
   m_instances[id].reset();
   m_removed_instances.push_back(id);
   m_structure_dirty = true;
+  journal_op(JournalOp::Kind::RemoveInstance, id);
 }
 
 void Scene::set_instance_visible(uint32_t id, bool visible) {
@@ -279,6 +308,7 @@ void Scene::set_instance_visible(uint32_t id, bool visible) {
   e.visible = visible;
   e.dirty = true;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceVisible, id)) o->flag = visible;
 }
 
 void Scene::set_instance_catcher(uint32_t id, bool catcher) {
@@ -287,6 +317,7 @@ void Scene::set_instance_catcher(uint32_t id, bool catcher) {
   e.catcher = catcher;
   e.dirty = true;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetInstanceCatcher, id)) o->flag = catcher;
 }
 
 bool Scene::instance_catcher(uint32_t id) const { return get_slot(m_instances, id, "instance").catcher; }
@@ -318,6 +349,10 @@ uint32_t Scene::add_light(const std::string& type, const ParamSet& params) {
   auto l = create_light(type, params, "light " + std::to_string(id));
   m_lights.emplace_back(LightEntry{type, params, l});
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddLight, id)) {
+    o->type = type;
+    o->params = params;
+  }
   return id;
 }
 
@@ -327,6 +362,10 @@ void Scene::update_light(uint32_t id, const std::string& type, const ParamSet& p
   e.type = type;
   e.params = params;
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::UpdateLight, id)) {
+    o->type = type;
+    o->params = params;
+  }
 }
 
 namespace {
@@ -347,6 +386,7 @@ void Scene::remove_texture(uint32_t id) {
     if (m_materials[i] && params_refer_to_texture(m_materials[i]->params, id))
       throw Error("texture " + std::to_string(id) + " is still used by material " + std::to_string(i));
   m_textures[id].reset();
+  journal_op(JournalOp::Kind::RemoveTexture, id);
 }
 
 void Scene::remove_material(uint32_t id) {
@@ -368,18 +408,24 @@ void Scene::remove_material(uint32_t id) {
           throw Error("material " + std::to_string(id) + " is still used by the triangles of mesh " + std::to_string(i));
   m_materials[id].reset();
   m_structure_dirty = true;
+  journal_op(JournalOp::Kind::RemoveMaterial, id);
 }
 
 void Scene::remove_light(uint32_t id) {
   get_slot(m_lights, id, "light");
   m_lights[id].reset();
   m_structure_dirty = true;
+  journal_op(JournalOp::Kind::RemoveLight, id);
 }
 
 void Scene::set_medium(const std::string& type, const ParamSet& params) {
   auto m = create_medium(type, params, "medium");
   m_medium = MediumEntry{type, params, m};
   m_structure_dirty = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetMedium)) {
+    o->type = type;
+    o->params = params;
+  }
 }
 
 std::vector<float> Scene::camera_transmittance(const std::vector<float>& distance) const {
@@ -403,12 +449,14 @@ std::vector<float> Scene::camera_transmittance(const std::vector<float>& distanc
 void Scene::clear_medium() {
   m_medium.reset();
   m_structure_dirty = true;
+  journal_op(JournalOp::Kind::ClearMedium);
 }
 
 void Scene::set_camera(const PinholeCamera& camera) {
   camera.validate();
   m_camera = camera;
   m_camera_set = true;
+  if (JournalOp* o = journal_op(JournalOp::Kind::SetCamera)) o->camera = camera;
 }
 
 void Scene::restore_slot_counts(size_t meshes, size_t textures, size_t materials, size_t instances, size_t lights) {
@@ -424,6 +472,7 @@ void Scene::restore_slot_counts(size_t meshes, size_t textures, size_t materials
 bool Scene::has_pending_edits() const { return m_structure_dirty || !m_removed_instances.empty(); }
 
 void Scene::commit() {
+  journal_op(JournalOp::Kind::Commit);
   uint64_t builds_before = m_accel->mesh_builds();
   bool top_dirty = !m_removed_instances.empty();
   // 0. Which meshes need the alpha test: those used by an instance whose material (override
@@ -498,6 +547,10 @@ void Scene::render(const RenderSettings& settings, Film* film) {
     throw Error("render: a medium (" + m_medium->type + ") with shadow catchers is not supported: a photo "
                 "background has no fog of its own to match (fog on photos is applied from the photo's depth)");
   m_render_scene.camera = m_camera;
+  if (m_journaling) {
+    if (JournalOp* o = journal_op(JournalOp::Kind::Render)) o->params = settings.to_params();
+    if (!m_journal_autosave.empty()) save_journal(m_journal_autosave);
+  }
   // Labels read no colour texels: label-only renders leave the textures as they are.
   RenderStats lod_stats;
   if (!settings.labels_only) {
@@ -515,21 +568,6 @@ void Scene::render(const RenderSettings& settings, Film* film) {
   film->stats.texture_lod_time_s = lod_stats.texture_lod_time_s;
   film->stats.texture_baked_bytes = lod_stats.texture_baked_bytes;
   texture_memory(&film->stats.texture_bytes_full, &film->stats.texture_bytes_resident);
-}
-
-void Scene::check_extension_failures() const {
-  // NOTE: a user extension's non-finite output is replaced by 0 where it happens (inside the
-  // render loop nothing can throw); the render then fails, never returning damaged pixels.
-  for (size_t i = 0; i < m_textures.size(); ++i)
-    if (m_textures[i]) {
-      std::string f = m_textures[i]->object->failure();
-      if (!f.empty()) throw Error("render: texture " + std::to_string(i) + ": " + f);
-    }
-  for (size_t i = 0; i < m_meshes.size(); ++i)
-    if (m_meshes[i] && m_meshes[i]->mesh->shape) {
-      std::string f = m_meshes[i]->mesh->shape->failure();
-      if (!f.empty()) throw Error("render: mesh " + std::to_string(i) + ": " + f);
-    }
 }
 
 }  // namespace sg

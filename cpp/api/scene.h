@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "api/journal.h"
 #include "camera/camera.h"
 #include "core/error.h"
 #include "core/params.h"
@@ -238,6 +239,36 @@ class Scene {
   void save(const std::string& path) const;
   static std::unique_ptr<Scene> load(const std::string& path);
 
+  // Change journal (api/journal.h) -------------------------------------------------------
+  /// Starts recording (dropping what was recorded): the journal begins with the scene as it
+  /// is now (its objects as add operations with their ids, the extensions noted, the camera,
+  /// the slot counts) and then receives every edit through this API as it succeeds, commits
+  /// included. Off until called: a recording scene keeps removed meshes and pixels alive.
+  void begin_journal();
+  /// Stops recording and drops the journal.
+  void end_journal();
+  bool journaling() const { return m_journaling; }
+  /// Operations recorded so far.
+  size_t journal_size() const { return m_journal.size(); }
+  /// Writes the journal: XML in the scene file's vocabulary (<op kind="add_texture" id=...>
+  /// with <param> children) and a binary sidecar "<path>.bin" (mesh arrays, pixels, the
+  /// extensions' sources). Throws when not recording.
+  void save_journal(const std::string& path) const;
+  /// A fresh scene with a journal's operations applied in order (ids checked): it renders
+  /// bit-identically to the scene that recorded it. `render_params` receives the settings of
+  /// the last render recorded (empty when none). The extensions the journal notes must be
+  /// loaded first (journal_extensions: their embedded sources). Throws sg::FileError naming
+  /// the file and the operation.
+  static std::unique_ptr<Scene> replay(const std::string& path, ParamSet* render_params = nullptr);
+  /// The extensions a journal file notes, with their embedded sources.
+  static std::vector<JournalExtension> journal_extensions(const std::string& path);
+  /// Records that an extension was loaded for this scene (its source is embedded in saved
+  /// journals, so that a replay elsewhere can compile it).
+  void note_extension(const std::string& source, const std::string& sha256, const std::string& text);
+  /// Render() first writes the journal to `path` ("" = off): a process that dies inside the
+  /// render leaves the journal of the scene it was rendering.
+  void set_journal_autosave(const std::string& path) { m_journal_autosave = path; }
+
   // Read access used by the scene file writer.
   struct TextureEntry {
     std::string type;
@@ -326,6 +357,17 @@ class Scene {
   PinholeCamera m_camera;
   bool m_camera_set = false;
   bool m_structure_dirty = true;  // materials / lights / labels changed
+
+  /// The journal's next operation when recording (null otherwise); edits call it once they
+  /// succeeded and fill its fields.
+  JournalOp* journal_op(JournalOp::Kind kind, uint32_t id = 0);
+  /// The current state as journal operations (begin_journal's start).
+  void journal_state();
+  bool m_journaling = false;
+  int m_journal_muted = 0;  ///< > 0 while an edit makes others internally (not recorded twice)
+  std::vector<JournalOp> m_journal;
+  std::vector<JournalExtension> m_extensions;
+  std::string m_journal_autosave;
 
   std::unique_ptr<Accel> m_accel;
   std::shared_ptr<Material> m_default_material;

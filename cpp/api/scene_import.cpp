@@ -15,6 +15,11 @@ uint32_t Scene::add_embedded_texture(std::shared_ptr<ImageData> pixels, const Co
   p.set("scale", std::vector<double>{scale.x, scale.y, scale.z});
   auto t = make_image_texture(*pixels, scale);
   m_textures.emplace_back(TextureEntry{"embedded_image", p, t, pixels, false});
+  if (JournalOp* o = journal_op(JournalOp::Kind::AddTexture, id)) {
+    o->type = "embedded_image";
+    o->params = p;
+    o->pixels = pixels;
+  }
   return id;
 }
 

@@ -243,6 +243,7 @@ PYBIND11_MODULE(_core, m) {
 Edits accumulate; commit() applies only what changed (only new or edited meshes get
 a BVH build). render() commits pending edits first.)doc");
   bind_extensions(m, scene_class);
+  bind_journal(scene_class);
   scene_class
       .def(py::init<>())
       .def("add_mesh",

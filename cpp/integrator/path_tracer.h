@@ -68,6 +68,9 @@ struct RenderSettings {
   /// (integrator/path_tracer.cpp: one default per setting, shared by the bindings and the
   /// YAML formats). Throws sg::Error naming `context`.
   static RenderSettings from_params(const ParamSet& params, const std::string& context = "render settings");
+  /// The settings as the parameters from_params reads (every one given): from_params(to_params())
+  /// gives these settings back exactly (the change journal records renders so).
+  ParamSet to_params() const;
 };
 
 /// Renders `scene` into `film` (allocated here). Deterministic for a given seed,

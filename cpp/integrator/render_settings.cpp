@@ -14,6 +14,31 @@ RenderSettings RenderSettings::from_params(const ParamSet& params, const std::st
   return *Registry::instance().create<RenderSettings>("render", "path_tracer", params, PluginContext{}, context);
 }
 
+ParamSet RenderSettings::to_params() const {
+  ParamSet p;
+  p.set("spp", int64_t(spp));
+  p.set("max_depth", int64_t(max_depth));
+  p.set("rr_depth", int64_t(rr_depth));
+  p.set("max_medium_depth", int64_t(max_medium_depth));
+  p.set("next_event", next_event);
+  p.set("seed", int64_t(seed));
+  p.set("threads", int64_t(threads));
+  p.set("tile_size", int64_t(tile_size));
+  p.set("texture_filtering", texture_filtering);
+  p.set("exposure", double(exposure));
+  p.set("clamp_indirect", double(clamp_indirect));
+  p.set("denoise", denoise);
+  p.set("noise_threshold", double(noise_threshold));
+  p.set("target_psnr", double(target_psnr));
+  p.set("min_spp", int64_t(min_spp));
+  p.set("max_spp", int64_t(max_spp));
+  p.set("labels_only", labels_only);
+  p.set("texture_lod", texture_lod);
+  p.set("texture_lod_margin", int64_t(texture_lod_margin));
+  p.set("texture_budget_mib", double(texture_budget_mib));
+  return p;
+}
+
 void RenderSettings::validate() const {
   if (spp == 0) throw Error("render settings: spp must be at least 1");
   if (max_depth == 0) throw Error("render settings: max_depth must be at least 1");

@@ -65,7 +65,7 @@ def __getattr__(name: str):
         globals()[name] = value
         return value
     raise AttributeError(f"module 'synthgen' has no attribute {name!r}")
-from .scene import extensions, primitives, wear  # noqa: F401
+from .scene import extensions, journal, primitives, wear  # noqa: F401
 from .scene.scene_file import build_scene, load_scene  # noqa: F401
 
 __all__ = [

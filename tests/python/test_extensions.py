@@ -4,6 +4,9 @@ and bad extensions' errors."""
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import textwrap
 
 import numpy as np
@@ -234,7 +237,8 @@ def test_missing_entry_symbol(tmp_path):
 
 def test_wrong_abi_version(tmp_path):
     path = _write(tmp_path, "abi.c", GOOD_TEX % ("1.f", "abi_tex", 1, "99u"))
-    with pytest.raises(ExtensionError, match=r"abi\.c: built for extension ABI version 99; this synthgen has version 1"):
+    with pytest.raises(ExtensionError, match=r"abi\.c: built for extension ABI version 99; this synthgen has "
+                                             r"version 1"):
         sg.Scene().load_extension(path)
 
 
@@ -321,3 +325,80 @@ def test_a_broken_extension_in_a_scene_file_points_at_its_entry(tmp_path):
     f.write_text(SCENE.format(allow="allow_extensions: true", path=bad))
     with pytest.raises(sg.SceneFileError, match=r"(?s)scene\.yaml:4:\d+: extensions\[0\]: .*bad\.c:3:\d+: error"):
         sg.load_scene(str(f), allow_extensions=True)
+
+
+CRASH_C = """
+#include <stdint.h>
+static const sg_ext_param params[] = {
+    {"crash", SG_EXT_FLOAT, {0.f}, 0.f, 1.f, "a per-frame draw"},
+    {"above", SG_EXT_FLOAT, {2.f}, 0.f, 2.f, "crash when crash > above"},
+    {"address", SG_EXT_FLOAT, {0.f}, 0.f, 0.f, "the address written to"},
+};
+static void f(const sg_ext_point* q, const float* a, const sg_ext_host* h, float* out) {
+  if (a[0] > a[1] && q->p[0] < -0.01f) {  /* in the render, not while the average is estimated (p >= 0) */
+    volatile int* p = (volatile int*)(uintptr_t)a[2];
+    *p = 1;  /* a real null-pointer write: SIGSEGV */
+  }
+  out[0] = 0.5f;
+}
+static const sg_ext_texture tex[] = {{"crash_tex", "crashes", 1, 0, params, 3, f, 0}};
+SG_EXT_EXPORT const sg_ext_library* synthgen_extension(void) {
+  static const sg_ext_library lib = {SG_EXT_ABI_VERSION, tex, 1, 0, 0};
+  return &lib;
+}
+"""
+
+
+def test_a_crash_inside_an_extension_fails_only_its_frame(tmp_path):
+    """A segfault in a user's C code in a worker process: that frame is reported failed (the
+    worker died, again when rendered alone), every other frame is rendered and complete."""
+    from synthgen import run as runner
+    from synthgen.outputs.meta import frame_status
+    from synthgen.scenario import load_scenario, sample_frame
+
+    crash = _write(tmp_path, "crash.c", CRASH_C)
+    tiny = os.path.join(os.path.dirname(__file__), "scenarios", "tiny.yaml")
+    text = open(tiny, encoding="utf-8").read()
+    text = text.replace("ground: {size: 20, material: {type: diffuse, albedo: {uniform: [[0.2, 0.2, 0.2], [0.5, 0.5, "
+                        "0.5]]}}}",
+                        "ground: {size: 20, material: {type: diffuse, albedo: {texture: {type: crash_tex, crash: "
+                        "{uniform: [0, 1]}, above: ABOVE}}}}")
+    text += f"allow_extensions: true\nextensions: [{crash}]\n"
+    path = tmp_path / "crash.yaml"
+    path.write_text(text.replace("ABOVE", "2"))
+    sc = load_scenario(str(path), allow_extensions=True)
+    draws = {k: v for k in range(sc.count) for key, v in sample_frame(sc, k).sampled.items() if "crash" in key}
+    assert len(draws) == sc.count
+    above = float(np.median(list(draws.values())))
+    crashing = {k for k, v in draws.items() if v > above}
+    assert 0 < len(crashing) < sc.count
+    path.write_text(text.replace("ABOVE", repr(above)))
+    out = str(tmp_path / "out")
+    s = runner.run(str(path), out, workers=2, progress=False, allow_extensions=True)
+    failed = {f["frame"]: f["error"] for f in s["failures"]}
+    assert set(failed) == crashing, s.text()
+    for k, err in failed.items():
+        assert "WorkerDied" in err and "SIGSEGV" in err and f"frame {k}" in err, err
+    # The frame rendered alone wrote its scene's journal before rendering: replayed in a fresh
+    # process, it crashes the same way (what a bug report carries).
+    journals = [f["journal"] for f in s["failures"]]
+    assert all(j.endswith(".journal") and os.path.isfile(j + ".bin") for j in journals), journals
+    proc = subprocess.run([sys.executable, "-m", "synthgen", "replay", journals[0], "-o", str(tmp_path / "r"),
+                           "--allow-extensions"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == -signal.SIGSEGV, (proc.returncode, proc.stderr[-2000:])
+    complete, broken = frame_status(out)
+    assert set(complete) == set(range(sc.count)) - crashing and not broken
+    assert s["task_bytes"] < 200 < s["shared_bytes"]
+
+
+def test_a_changed_extension_replaces_its_plugins_and_old_objects_keep_their_code(tmp_path):
+    path = _write(tmp_path, "ver.c", GOOD_TEX % ("0.25f", "ver_tex", 1, "SG_EXT_ABI_VERSION"))
+    s = sg.Scene()
+    s.load_extension(path)
+    old = s.add_texture("ver_tex")
+    _write(tmp_path, "ver.c", GOOD_TEX % ("0.75f", "ver_tex", 1, "SG_EXT_ABI_VERSION"))
+    info = s.load_extension(path)
+    assert not info["cached"]
+    new = s.add_texture("ver_tex")
+    pts = np.zeros((1, 3), np.float32)
+    assert s.texture_values(old, pts)[0, 0] == 0.25 and s.texture_values(new, pts)[0, 0] == 0.75

@@ -20,6 +20,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--recycle", type=positive_int, default=200, metavar="N",
                    help="replace a worker process after N frames (default 200)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--journal", action="store_true",
+                   help="write each frame's scene journal into DIR/journals (a failed frame's always goes into "
+                        "DIR/failed); `synthgen replay` renders one again")
     add_scenario_overrides(p)
     add_extension_option(p)
 
@@ -30,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     summary = run_scenario(args.scenario, args.output, count=args.count, workers=args.workers,
                            scheduler=args.scheduler, resume=args.resume, only=args.only, recycle=args.recycle,
                            progress=not args.no_progress, overrides=scenario_overrides(args),
-                           allow_extensions=args.allow_extensions)
+                           allow_extensions=args.allow_extensions, journal=args.journal)
     print(summary.text(debug=getattr(args, "debug", False)))
     if summary["interrupted"]:
         return EXIT_INTERRUPTED

@@ -1,19 +1,58 @@
 """Executors: where frames are rendered. :class:`LocalExecutor` (worker processes on this
 machine, recycled after ``recycle`` frames) and :class:`DaskExecutor` (a Dask cluster) run
 the same task function (:func:`synthgen.run.task.render_task`), so a frame is the same
-whichever executor renders it."""
+whichever executor renders it.
+
+What travels: each worker receives the run's shared part (the validated scenario, the output
+directory, the thread count) once -- as its initializer's argument, or scattered to every Dask
+worker -- and per frame only the frame's number (:attr:`task_bytes` measures it).
+
+A worker process that dies (a crash in native code, e.g. a user's C extension, or the kernel's
+out-of-memory killer) takes only its frame: the frames in flight are rendered again one at a
+time in a fresh process, and the one that kills its process again is reported failed
+(``worker process died``) while the run goes on; finished frames are on disk already.
+"""
 from __future__ import annotations
 
+import os
+import pickle
 import signal
 import time
-from typing import Any, Callable, Dict, Iterator, List
+from collections import deque
+from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Sequence
 
 __all__ = ["LocalExecutor", "DaskExecutor"]
 
+#: The shared part of the run, set once per worker process.
+_SHARED: Dict[str, Any] = {}
 
-def _init_worker() -> None:
+
+def _init_worker(shared: tuple) -> None:
     # Ctrl-C is handled by the parent, which then terminates the pool.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _SHARED["args"] = shared
+
+
+def _run(fn: Callable, frame: int, options: Dict[str, Any]) -> Dict[str, Any]:
+    """A frame in a worker: ``fn(*shared[:2], frame, *shared[2:], **options)``."""
+    shared = _SHARED["args"]
+    return fn(shared[0], shared[1], frame, *shared[2:], **options)
+
+
+def _died(frame: int, exitcode: Optional[int], journal: str = "") -> Dict[str, Any]:
+    how = ""
+    if exitcode is not None and exitcode < 0:
+        try:
+            how = f" (killed by {signal.Signals(-exitcode).name})"
+        except ValueError:
+            how = f" (killed by signal {-exitcode})"
+    elif exitcode is not None:
+        how = f" (exit code {exitcode})"
+    return {"frame": frame, "ok": False, "pid": None,
+            "error": f"WorkerDied: the worker process died while rendering frame {frame}{how}, again when the frame "
+                     "was rendered alone: a crash in native code (a C extension?) or the out-of-memory killer; the "
+                     "other frames are unaffected",
+            "traceback": "", **({"journal": journal} if journal else {})}
 
 
 class LocalExecutor:
@@ -24,53 +63,143 @@ class LocalExecutor:
     def __init__(self, workers: int = 1, recycle: int = 200):
         self.workers = max(1, int(workers))
         self.recycle = max(1, int(recycle))
-        self._pool = None
+        self._pool: Any = None
+        #: Bytes pickled per frame (the task: function reference, frame, options) and once per
+        #: worker (the shared part), measured by the last map().
+        self.task_bytes = 0
+        self.shared_bytes = 0
 
-    def map(self, fn: Callable, args: List[tuple]) -> Iterator[Dict[str, Any]]:
-        if self.workers == 1:
-            for a in args:
-                yield fn(*a)
-            return
+    def _new_pool(self, workers: int, shared: tuple) -> Any:
         import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
 
-        ctx = mp.get_context("spawn")  # no fork of a process with TBB/Embree threads
-        self._pool = ctx.Pool(self.workers, initializer=_init_worker, maxtasksperchild=self.recycle)
-        try:
-            for r in self._pool.imap_unordered(_star, [(fn, a) for a in args]):
+        # NOTE: spawn, no fork of a process with TBB/Embree threads; max_tasks_per_child
+        # (Python 3.11) replaces a worker after `recycle` frames.
+        self._pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_init_worker,
+                                         initargs=(shared,), max_tasks_per_child=self.recycle)
+        return self._pool
+
+    def map(self, fn: Callable, shared: tuple, frames: Sequence[int], options: Optional[Dict[str, Any]] = None,
+            alone_options: Optional[Dict[str, Any]] = None,
+            alone_journal: Optional[Callable[[int], str]] = None) -> Iterator[Dict[str, Any]]:
+        """Results of ``fn(shared[0], shared[1], frame, *shared[2:], **options)`` per frame, in
+        completion order. ``alone_options``: more keyword arguments of the frames rendered alone
+        after a worker died (e.g. to write the frame's journal before rendering);
+        ``alone_journal(frame)``: the journal such a frame leaves when its process dies again."""
+        options = dict(options or {})
+        self.shared_bytes = len(pickle.dumps(shared))
+        self.task_bytes = len(pickle.dumps((_run, fn, frames[0] if frames else 0, options)))
+        if self.workers == 1:
+            for k in frames:
+                yield fn(shared[0], shared[1], k, *shared[2:], **options)
+            return
+        from concurrent.futures import FIRST_COMPLETED, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        pending: Deque[int] = deque(frames)
+        while pending:
+            pool = self._new_pool(self.workers, shared)
+            inflight: Dict[Any, int] = {}
+            suspects: List[int] = []
+            try:
+                while (pending or inflight) and not suspects:
+                    # At most one frame per worker in flight: when a worker dies, only these
+                    # frames can have killed it.
+                    while pending and len(inflight) < self.workers:
+                        k = pending.popleft()
+                        inflight[pool.submit(_run, fn, k, options)] = k
+                    done, _ = wait(inflight, return_when=FIRST_COMPLETED)
+                    for f in done:
+                        k = inflight.pop(f)
+                        try:
+                            r = f.result()
+                        except BrokenProcessPool:
+                            suspects.append(k)
+                            continue
+                        yield r
+                suspects.extend(inflight.values())
+            except BaseException:
+                self.shutdown()
+                raise
+            pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+            for k in sorted(set(suspects)):
+                r = self._alone(fn, shared, k, {**options, **(alone_options or {})})
+                if not r["ok"] and r["error"].startswith("WorkerDied") and alone_journal is not None:
+                    path = alone_journal(k)
+                    if os.path.isfile(path):
+                        r["journal"] = path
                 yield r
-            self._pool.close()
+
+    def _alone(self, fn: Callable, shared: tuple, frame: int, options: Dict[str, Any]) -> Dict[str, Any]:
+        """Renders one frame in a fresh process of its own: its result, or the report of its
+        death."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        pool = self._new_pool(1, shared)
+        fut = pool.submit(_run, fn, frame, options)
+        # The worker process, taken now: a broken pool forgets its processes.
+        procs = list((getattr(pool, "_processes", None) or {}).values())
+        try:
+            return fut.result()
+        except BrokenProcessPool:
+            for p in procs:
+                p.join(10.0)
+            return _died(frame, procs[0].exitcode if procs else None)
         except BaseException:
-            self._pool.terminate()
+            self.shutdown()
             raise
         finally:
-            self._pool.join()
+            pool.shutdown(wait=True)
+            self._pool = None
 
     def shutdown(self) -> None:
-        if self._pool is not None:
-            self._pool.terminate()
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            procs = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for p in procs:
+                if p.is_alive():
+                    p.terminate()
 
 
-def _star(fa):
-    fn, a = fa
-    return fn(*a)
+def _run_dask(fn: Callable, shared: tuple, frame: int, options: Dict[str, Any]) -> Dict[str, Any]:
+    return fn(shared[0], shared[1], frame, *shared[2:], **options)
 
 
 class DaskExecutor:
     """Frames on a Dask distributed cluster (``address`` of a scheduler, or a
-    ``distributed.Client``). Workers keep their scene across frames like local ones."""
+    ``distributed.Client``). Workers keep their scene across frames like local ones; the shared
+    part is scattered to every worker once (a task carries its key and the frame number). A task
+    whose workers died (Dask retries it on others) is reported failed, and the run goes on."""
 
     def __init__(self, address: Any):
         from distributed import Client
 
         self.client = address if isinstance(address, Client) else Client(address)
         self._own = not isinstance(address, Client)
+        self.task_bytes = 0
+        self.shared_bytes = 0
 
-    def map(self, fn: Callable, args: List[tuple]) -> Iterator[Dict[str, Any]]:
+    def map(self, fn: Callable, shared: tuple, frames: Sequence[int], options: Optional[Dict[str, Any]] = None,
+            alone_options: Optional[Dict[str, Any]] = None,
+            alone_journal: Optional[Callable[[int], str]] = None) -> Iterator[Dict[str, Any]]:
         from distributed import as_completed
 
-        futures = [self.client.submit(fn, *a, pure=False, key=f"synthgen-frame-{a[2]}-{time.time_ns()}") for a in args]
+        options = dict(options or {})
+        self.shared_bytes = len(pickle.dumps(shared))
+        # NOTE: scatter() splits a sequence into one future per element: the tuple goes in a list.
+        handle = self.client.scatter([shared], broadcast=True, hash=False)[0]
+        self.task_bytes = len(pickle.dumps((_run_dask, fn, handle.key, frames[0] if frames else 0, options)))
+        stamp = time.time_ns()
+        futures = {self.client.submit(_run_dask, fn, handle, k, options, pure=False,
+                                      key=f"synthgen-frame-{k}-{stamp}"): k for k in frames}
         for fut in as_completed(futures):
-            yield fut.result()
+            try:
+                yield fut.result()
+            except Exception as e:  # noqa: BLE001 -- a task Dask gave up on (KilledWorker, ...)
+                k = futures[fut]
+                yield {"frame": k, "ok": False, "error": f"{type(e).__name__}: {e}", "traceback": "", "pid": None}
 
     def shutdown(self) -> None:
         if self._own:

@@ -3,7 +3,8 @@
 Every file is written to a temporary name and renamed; the metadata is written last and
 marks a frame complete, so ``--resume`` renders exactly the frames without it and a killed
 run leaves no partial file under a final name. Frames go to an executor
-(:mod:`synthgen.run.executors`) as tasks carrying the validated scenario; the dataset-level
+(:mod:`synthgen.run.executors`: each worker gets the validated scenario once, a task only its
+frame); a failed frame leaves its scene's change journal in ``failed/``; the dataset-level
 files (``annotations/coco.json``, ``dataset.yaml``) are written at the end from the
 per-frame metadata. The layout of the directory: :mod:`synthgen.outputs`.
 """
@@ -24,7 +25,7 @@ from .manifest import build_manifest, check_manifest, write_manifest
 from ..scenario import check_inputs, load_scenario
 from ..scenario.load import check_memory
 from .executors import DaskExecutor, LocalExecutor
-from .task import render_task
+from .task import journal_path, render_task
 
 __all__ = ["run", "RunSummary", "remove_temporaries", "ABORT_AFTER"]
 
@@ -53,6 +54,8 @@ class RunSummary(dict):
                  f"failures: {len(self['failures'])}"]
         for f in self["failures"][:20]:
             lines.append(f"  frame {f['frame']}: {f['error']}")
+            if f.get("journal"):
+                lines.append(f"    its scene: synthgen replay {f['journal']}")
             if debug and f.get("traceback"):
                 lines.append("    " + f["traceback"].rstrip().replace("\n", "\n    "))
         if self["rendered"]:
@@ -80,10 +83,13 @@ class RunSummary(dict):
 def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: int = 1,
         scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
         recycle: int = 200, progress: bool = True, threads: Optional[int] = None,
-        overrides: Sequence[Tuple[str, Any]] = (), allow_extensions: bool = False) -> RunSummary:
+        overrides: Sequence[Tuple[str, Any]] = (), allow_extensions: bool = False,
+        journal: bool = False) -> RunSummary:
     """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`); ``overrides``:
     (key path, value) pairs set in the scenario before validation (``--set``);
-    ``allow_extensions``: consent to compile and run the scenario's C extensions."""
+    ``allow_extensions``: consent to compile and run the scenario's C extensions; ``journal``:
+    write every frame's change journal into ``journals/`` (a failed frame's always goes into
+    ``failed/``: ``synthgen replay`` renders it again)."""
     sc = load_scenario(scenario_path, overrides, allow_extensions)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once
     n = int(count) if count is not None else sc.count
@@ -110,7 +116,6 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     if sc.spec["render"]["threads"]:
         threads = sc.spec["render"]["threads"]
     executor = DaskExecutor(scheduler) if scheduler is not None else LocalExecutor(workers, recycle)
-    args = [(sc, os.path.abspath(out_dir), k, threads) for k in todo]
     results, failures = [], []
     interrupted = False
     t0 = time.perf_counter()
@@ -124,7 +129,10 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
             bar = None
     aborted = ""
     try:
-        for r in executor.map(render_task, args):
+        out_abs = os.path.abspath(out_dir)
+        for r in executor.map(render_task, (sc, out_abs, threads), todo,
+                              options={"journal": True} if journal else {}, alone_options={"journal_first": True},
+                              alone_journal=lambda k: journal_path(out_abs, k, True)):
             (results if r["ok"] else failures).append(r)
             if bar is not None:
                 bar.update(1)
@@ -157,7 +165,8 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     m = max(1, len(results))
     summary = RunSummary(
         rendered=len(results), skipped=len(frames) - len(todo),
-        failures=[{"frame": f["frame"], "error": f["error"], "traceback": f.get("traceback", "")} for f in failures],
+        failures=[{"frame": f["frame"], "error": f["error"], "traceback": f.get("traceback", ""),
+                   "journal": f.get("journal", "")} for f in failures],
         wall_s=wall, frames_per_s=len(results) / wall if wall > 0 else 0.0,
         mean_s_per_frame=stages.get("total_s", 0.0) / m,
         stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
@@ -165,6 +174,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         incomplete=[{"frame": k, "reason": r} for k, r in broken.items()], aborted=aborted,
         dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),
                        key=lambda d: d["frame"]),
-        drops_allowed=bool(sc.spec["placement"]["allow_drops"]))
+        drops_allowed=bool(sc.spec["placement"]["allow_drops"]),
+        task_bytes=executor.task_bytes, shared_bytes=executor.shared_bytes)
     write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
     return summary

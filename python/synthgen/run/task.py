@@ -13,7 +13,7 @@ from .._core import load_image_plugin
 from ..frame import FrameRenderer
 from ..scenario import Scenario
 
-__all__ = ["render_task", "resident_bytes", "release_free_memory"]
+__all__ = ["render_task", "journal_path", "resident_bytes", "release_free_memory"]
 
 _WORKER: Dict[str, Any] = {}
 
@@ -53,10 +53,33 @@ def release_free_memory() -> None:
         _MALLOC_TRIM(0)
 
 
-def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) -> Dict[str, Any]:
+def journal_path(out_dir: str, frame: int, failed: bool) -> str:
+    """Where a frame's journal goes: ``journals/`` (``--journal``) or ``failed/`` (a failure)."""
+    return os.path.join(out_dir, "failed" if failed else "journals", outputs.frame_name(frame) + ".journal")
+
+
+def _save_journal(fr: Any, path: str) -> str:
+    """The frame's journal saved to ``path`` ("" when it cannot be: the failure stays reported)."""
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        fr.scene.save_journal(path)
+        return path
+    except Exception:  # noqa: BLE001 -- the frame's own error is what gets reported
+        return ""
+
+
+def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0, journal: bool = False,
+                journal_first: bool = False) -> Dict[str, Any]:
     """Renders and writes one frame in the calling process, reusing this process's
     FrameRenderer for the same scenario. Workers receive the validated scenario itself
-    (pickled), never a path they would read again. Returns {frame, ok, error, timings}."""
+    (pickled), never a path they would read again. Returns {frame, ok, error, timings}.
+
+    The scene records its change journal from the frame's start (Scene.begin_journal): a frame
+    that fails leaves it in ``failed/`` (``journal`` in the result: ``synthgen replay`` renders
+    it again outside the run); ``journal`` writes it to ``journals/`` for every frame;
+    ``journal_first`` writes it before each render (a frame rendered alone after a worker died:
+    a crash leaves the journal of the render it happened in)."""
+    fr = None
     try:
         key = (scenario.sha256, scenario.base_dir, threads)
         fr = _WORKER.get("renderer")
@@ -64,9 +87,21 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) 
             load_image_plugin()
             fr = FrameRenderer(scenario, threads)
             _WORKER.update(renderer=fr, key=key, frames=0)
+        fr.scene.begin_journal()
+        failed_path = journal_path(out_dir, frame, True)
+        if journal_first:
+            os.makedirs(os.path.dirname(failed_path), exist_ok=True)
+            fr.scene.set_journal_autosave(failed_path)
         t0 = time.perf_counter()
         arrays, meta, timings = fr.render(frame)
         t1 = time.perf_counter()
+        if journal_first:
+            fr.scene.set_journal_autosave("")
+            for p in (failed_path, failed_path + ".bin"):
+                if os.path.exists(p):
+                    os.unlink(p)
+        if journal:
+            _save_journal(fr, journal_path(out_dir, frame, False))
         outputs.write_frame(out_dir, frame, arrays, meta, fr.sc.spec["outputs"])
         timings["write_s"] = time.perf_counter() - t1
         timings["total_s"] = time.perf_counter() - t0
@@ -78,5 +113,9 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0) 
         return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid(),
                 "rss_bytes": resident_bytes()}
     except Exception as e:  # reported per frame; the run goes on
-        return {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",
-                "traceback": traceback.format_exc(), "pid": os.getpid()}
+        out = {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",
+               "traceback": traceback.format_exc(), "pid": os.getpid()}
+        if fr is not None and fr.scene.journaling:
+            fr.scene.set_journal_autosave("")
+            out["journal"] = _save_journal(fr, journal_path(out_dir, frame, True))
+        return out

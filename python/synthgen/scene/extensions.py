@@ -26,7 +26,7 @@ from typing import Any, Dict, List, Optional
 from .. import _core
 from .._core import Scene, SynthgenError
 
-__all__ = ["ExtensionError", "load_extension", "compile_extension", "header_dir", "compiler",
+__all__ = ["ExtensionError", "load_extension", "compile_extension", "header_dir", "compiler", "cache_dir",
            "loaded_extensions", "example", "NOT_ALLOWED"]
 
 #: Flags of every compile (the cache key includes them).
@@ -80,7 +80,8 @@ def compiler() -> Dict[str, Any]:
     return _COMPILER[name]
 
 
-def _cache_dir() -> str:
+def cache_dir() -> str:
+    """Where compiled extensions are kept (``$SYNTHGEN_CACHE/extensions``)."""
     root = os.environ.get("SYNTHGEN_CACHE", os.path.join(os.path.expanduser("~"), ".cache", "synthgen"))
     return os.path.join(root, "extensions")
 
@@ -109,7 +110,7 @@ def compile_extension(path: str) -> Dict[str, Any]:
         key.update(hashlib.sha256(part).digest())
     digest = key.hexdigest()
     stem = "".join(c if c.isalnum() or c in "_-" else "_" for c in os.path.splitext(os.path.basename(path))[0])
-    cache = _cache_dir()
+    cache = cache_dir()
     lib = os.path.join(cache, f"{stem}-{digest[:24]}.so")
     info = {"library": lib, "source": path, "sha256": hashlib.sha256(src).hexdigest(), "cached": True}
     if os.path.isfile(lib):
@@ -149,8 +150,8 @@ def load_extension(path: str, scene: Optional[Scene] = None) -> Dict[str, Any]:
     from ..schema.plugins import refresh_runtime_plugins
 
     refresh_runtime_plugins()
-    if scene is not None and hasattr(scene, "note_extension"):
-        scene.note_extension(info["source"], info["sha256"])
+    if scene is not None:
+        scene.note_extension(info["source"], info["sha256"], _read_source(info["source"]))
     return info
 
 

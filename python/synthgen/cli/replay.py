@@ -1,0 +1,36 @@
+"""``synthgen replay JOURNAL -o DIR``: render a scene's change journal again, in this process."""
+from __future__ import annotations
+
+import argparse
+import os
+
+from . import Command, register
+from .common import add_extension_option, add_render_options, overrides, render_and_write, say
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("journal", metavar="JOURNAL", help="a journal (DIR/failed/*.journal of a run, Scene.save_journal)")
+    p.add_argument("-o", "--output", metavar="DIR",
+                   help="output directory (default: out/<journal file name without extension>)")
+    add_render_options(p)
+    add_extension_option(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..scene.journal import replay
+
+    scene, settings = replay(args.journal, allow_extensions=args.allow_extensions)
+    if settings.pop("labels_only", False):
+        say(f"{args.journal}: its last render was of labels only; rendering every channel")
+    settings.update(overrides(args))
+    out_dir = args.output or os.path.join("out", os.path.splitext(os.path.basename(args.journal))[0])
+    meta = {"source": os.path.abspath(args.journal), "objects": [], "lights": []}
+    return render_and_write(scene, settings, meta, out_dir, args.journal)
+
+
+register(Command("replay", "render a scene's change journal again",
+                 "Replay a change journal (a failed frame's DIR/failed/FRAME.journal, `synthgen run --journal`, "
+                 "Scene.save_journal) into a fresh scene and render it with the settings of the last render it "
+                 "recorded (bit-identical to that render; --spp etc. override), writing the files of `synthgen "
+                 "render`. A journal of a scene with C extensions embeds their sources: --allow-extensions compiles "
+                 "them.", add_arguments, run, order=32, module=__name__))
