@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -38,6 +39,23 @@ inline std::string write_file(const std::string& name, const uint8_t* data, size
   std::string path = temp_dir() + "/" + name;
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   f.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  return path;
+}
+
+/// Writes an input "XML[\0BIN\0SIDECAR]" as the files `name` and `name`.bin (empty without
+/// the separator); returns the XML file's path.
+inline std::string write_with_sidecar(const std::string& name, const uint8_t* data, size_t size) {
+  static const char k_sep[] = "\0BIN\0";
+  const uint8_t* sep = nullptr;
+  for (size_t i = 0; i + 5 <= size; ++i)
+    if (std::memcmp(data + i, k_sep, 5) == 0) {
+      sep = data + i;
+      break;
+    }
+  const size_t xml_size = sep ? size_t(sep - data) : size;
+  std::string path = write_file(name, data, xml_size);
+  const uint8_t* bin = sep ? sep + 5 : data + size;
+  write_file(name + ".bin", bin, size_t(data + size - bin));
   return path;
 }
 

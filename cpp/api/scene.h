@@ -358,6 +358,11 @@ class Scene {
   bool m_camera_set = false;
   bool m_structure_dirty = true;  // materials / lights / labels changed
 
+  /// A texture as save() and the journal write it: from pixels in memory ("embedded_image":
+  /// add_embedded_texture; "image": add_image_texture, its in-memory "file" key dropped) or by
+  /// its plugin.
+  uint32_t add_texture_entry(const std::string& type, const ParamSet& params, std::shared_ptr<ImageData> pixels,
+                             bool integer_source);
   /// The journal's next operation when recording (null otherwise); edits call it once they
   /// succeeded and fill its fields.
   JournalOp* journal_op(JournalOp::Kind kind, uint32_t id = 0);

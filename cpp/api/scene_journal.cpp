@@ -31,25 +31,6 @@ const std::pair<K, const char*> k_names[] = {
     {K::Extension, "extension"}, {K::Render, "render"},
 };
 
-/// A binary sidecar being read: its bytes, read once.
-std::vector<char> read_sidecar(const std::string& path, pugi::xml_node root) {
-  std::filesystem::path bin_path = std::filesystem::path(path).parent_path() / root.attribute("bin").as_string();
-  std::error_code ec;
-  if (!root.attribute("bin") || !std::filesystem::is_regular_file(bin_path, ec))
-    throw FileError(bin_path.string(), "the binary sidecar named by the journal's 'bin' attribute is not a file");
-  uint64_t size = std::filesystem::file_size(bin_path, ec);
-  std::ifstream in(bin_path, std::ios::binary);
-  if (ec || !in) throw FileError(bin_path.string(), "cannot open the journal's binary sidecar");
-  std::vector<char> bin;
-  try {
-    bin.resize(size_t(size));
-  } catch (const std::exception&) {
-    throw FileError(bin_path.string(), "binary sidecar of " + std::to_string(size) + " bytes does not fit in memory");
-  }
-  if (size && !in.read(bin.data(), std::streamsize(size))) throw FileError(bin_path.string(), "cannot read it");
-  return bin;
-}
-
 pugi::xml_node open_journal(pugi::xml_document& doc, const std::string& path) {
   pugi::xml_parse_result res = doc.load_file(path.c_str());
   if (!res) throw FileError(path, std::string("cannot parse journal: ") + res.description() + " at byte " +
@@ -60,52 +41,6 @@ pugi::xml_node open_journal(pugi::xml_document& doc, const std::string& path) {
     throw FileError(path, "journal version " + std::string(root.attribute("version").as_string()) +
                               " (this synthgen reads version 1)");
   return root;
-}
-
-void write_mesh(pugi::xml_node n, const TriangleMesh& m, std::ofstream& bin) {
-  n.append_attribute("name") = m.name.c_str();
-  n.append_attribute("vertices") = uint64_t(m.positions.size());
-  n.append_attribute("triangles") = uint64_t(m.triangle_count());
-  n.append_attribute("positions") = append_blob(bin, m.positions);
-  n.append_attribute("indices") = append_blob(bin, m.indices);
-  if (!m.normals.empty()) n.append_attribute("normals") = append_blob(bin, m.normals);
-  if (!m.uvs.empty()) n.append_attribute("uvs") = append_blob(bin, m.uvs);
-  if (!m.material_ids.empty()) n.append_attribute("material_ids") = append_blob(bin, m.material_ids);
-}
-
-TriangleMesh read_mesh(pugi::xml_node n, const std::vector<char>& bin, const std::string& ctx) {
-  TriangleMesh m;
-  m.name = n.attribute("name").as_string();
-  size_t nv = n.attribute("vertices").as_ullong(), nt = n.attribute("triangles").as_ullong();
-  if (nt > bin.size() || nv > bin.size()) throw Error(ctx + ": binary data is truncated");
-  read_blob(bin, n.attribute("positions").as_ullong(), nv, &m.positions, ctx);
-  read_blob(bin, n.attribute("indices").as_ullong(), 3 * nt, &m.indices, ctx);
-  if (n.attribute("normals")) read_blob(bin, n.attribute("normals").as_ullong(), nv, &m.normals, ctx);
-  if (n.attribute("uvs")) read_blob(bin, n.attribute("uvs").as_ullong(), nv, &m.uvs, ctx);
-  if (n.attribute("material_ids")) read_blob(bin, n.attribute("material_ids").as_ullong(), nt, &m.material_ids, ctx);
-  return m;
-}
-
-std::string fmt_map(const std::vector<std::pair<int32_t, int64_t>>& map) {
-  std::string s;
-  for (const auto& [from, to] : map) s += (s.empty() ? "" : " ") + std::to_string(from) + ":" + std::to_string(to);
-  return s;
-}
-
-std::vector<std::pair<int32_t, int64_t>> parse_map(const char* text, const std::string& ctx) {
-  std::vector<std::pair<int32_t, int64_t>> map;
-  std::istringstream is(text);
-  std::string item;
-  while (is >> item) {
-    size_t colon = item.find(':');
-    try {
-      if (colon == std::string::npos) throw std::invalid_argument("no colon");
-      map.emplace_back(int32_t(std::stol(item.substr(0, colon))), int64_t(std::stoll(item.substr(colon + 1))));
-    } catch (const std::exception&) {
-      throw Error(ctx + ": bad material_map entry '" + item + "'");
-    }
-  }
-  return map;
 }
 
 }  // namespace
@@ -311,14 +246,7 @@ void Scene::save_journal(const std::string& path) const {
         n.append_attribute("id") = o.id;
         n.append_attribute("value") = o.flag;
         break;
-      case K::SetCamera: {
-        float k[4] = {o.camera.fx, o.camera.fy, o.camera.cx, o.camera.cy};
-        n.append_attribute("intrinsics") = fmt_floats(k, 4).c_str();
-        n.append_attribute("width") = o.camera.width;
-        n.append_attribute("height") = o.camera.height;
-        n.append_attribute("world_from_camera") = fmt_floats(o.camera.world_from_camera.m.data(), 16).c_str();
-        break;
-      }
+      case K::SetCamera: write_camera(n, o.camera); break;
       case K::SlotCounts: {
         const char* names[5] = {"meshes", "textures", "materials", "instances", "lights"};
         for (size_t i = 0; i < 5 && i < o.counts.size(); ++i) n.append_attribute(names[i]) = o.counts[i];
@@ -342,7 +270,7 @@ void Scene::save_journal(const std::string& path) const {
 std::vector<JournalExtension> Scene::journal_extensions(const std::string& path) {
   pugi::xml_document doc;
   pugi::xml_node root = open_journal(doc, path);
-  std::vector<char> bin = read_sidecar(path, root);
+  std::vector<char> bin = read_sidecar(path, root, "journal");
   std::vector<JournalExtension> out;
   for (pugi::xml_node n : root.children("op")) {
     if (std::string(n.attribute("kind").as_string()) != "extension") continue;
@@ -357,7 +285,7 @@ std::vector<JournalExtension> Scene::journal_extensions(const std::string& path)
 std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_params) {
   pugi::xml_document doc;
   pugi::xml_node root = open_journal(doc, path);
-  std::vector<char> bin = read_sidecar(path, root);
+  std::vector<char> bin = read_sidecar(path, root, "journal");
   auto scene = std::make_unique<Scene>();
   Scene& s = *scene;
   if (render_params) *render_params = ParamSet();
@@ -411,27 +339,9 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
           pad(s.m_textures, id);
           std::string type = n.attribute("type").as_string();
           ParamSet ps = read_params(n);
-          if (n.attribute("offset")) {
-            auto px = std::make_shared<ImageData>();
-            px->width = n.attribute("width").as_int();
-            px->height = n.attribute("height").as_int();
-            px->channels = n.attribute("channels").as_int();
-            if (px->width < 1 || px->height < 1 || px->channels < 1 || px->channels > 4 || px->width > 65536 ||
-                px->height > 65536)
-              throw Error("bad image size");
-            read_blob(bin, n.attribute("offset").as_ullong(), size_t(px->width) * px->height * px->channels,
-                      &px->pixels, "texture " + std::to_string(id));
-            if (type == "embedded_image") {
-              expect(s.add_embedded_texture(px, ps.get_color("scale", Color(1.f)), ps.get_string("source", "")), id);
-            } else {
-              ParamSet rest;  // the pixels replace the in-memory key under "file"
-              for (const auto& [key, v] : ps.values())
-                if (key != "file" && key != "filename") rest.set(key, v);
-              expect(s.add_image_texture(px, n.attribute("integer").as_bool(false), rest), id);
-            }
-          } else {
-            expect(s.add_texture(type, ps), id);
-          }
+          std::shared_ptr<ImageData> px;
+          if (n.attribute("offset")) px = read_pixels(n, bin, "texture " + std::to_string(id));
+          expect(s.add_texture_entry(type, ps, px, n.attribute("integer").as_bool(false)), id);
           break;
         }
         case K::AddMaterial:
@@ -474,20 +384,7 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
         case K::SetInstanceMesh: s.set_instance_mesh(id32, n.attribute("mesh").as_uint()); break;
         case K::SetInstanceVisible: s.set_instance_visible(id32, n.attribute("value").as_bool()); break;
         case K::SetInstanceCatcher: s.set_instance_catcher(id32, n.attribute("value").as_bool()); break;
-        case K::SetCamera: {
-          auto k4 = parse_floats(n.attribute("intrinsics").as_string(), 4, "intrinsics");
-          auto t = parse_floats(n.attribute("world_from_camera").as_string(), 16, "world_from_camera");
-          PinholeCamera c;
-          c.fx = k4[0];
-          c.fy = k4[1];
-          c.cx = k4[2];
-          c.cy = k4[3];
-          c.width = n.attribute("width").as_uint();
-          c.height = n.attribute("height").as_uint();
-          c.world_from_camera = Transform::from_row_major(t.data());
-          s.set_camera(c);
-          break;
-        }
+        case K::SetCamera: s.set_camera(read_camera(n)); break;
         case K::SlotCounts: {
           uint64_t c[5];
           const char* names[5] = {"meshes", "textures", "materials", "instances", "lights"};

@@ -7,13 +7,18 @@
 
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <memory>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "camera/camera.h"
 #include "core/error.h"
 #include "core/params.h"
+#include "geometry/mesh.h"
+#include "io/image_io.h"
 
 namespace sg::xml {
 
@@ -108,6 +113,111 @@ void read_blob(const std::vector<char>& bin, uint64_t off, size_t count, std::ve
   if (off > bin.size() || count > (bin.size() - off) / sizeof(T)) throw Error(ctx + ": binary data is truncated");
   out->resize(count);
   if (count) std::memcpy(out->data(), bin.data() + off, count * sizeof(T));
+}
+
+/// The binary sidecar that `root`'s "bin" attribute names (next to `path`), read whole;
+/// `what` names the document in errors ("scene file", "journal").
+inline std::vector<char> read_sidecar(const std::string& path, pugi::xml_node root, const std::string& what) {
+  std::filesystem::path bin_path = std::filesystem::path(path).parent_path() / root.attribute("bin").as_string();
+  std::error_code ec;
+  if (!root.attribute("bin") || !std::filesystem::is_regular_file(bin_path, ec))
+    throw FileError(bin_path.string(), "the binary sidecar named by the " + what + "'s 'bin' attribute is not a file");
+  uint64_t size = std::filesystem::file_size(bin_path, ec);
+  std::ifstream in(bin_path, std::ios::binary);
+  if (ec || !in) throw FileError(bin_path.string(), "cannot open the binary sidecar");
+  std::vector<char> bin;
+  try {
+    bin.resize(size_t(size));
+  } catch (const std::exception&) {
+    throw FileError(bin_path.string(), "binary sidecar of " + std::to_string(size) + " bytes does not fit in memory");
+  }
+  if (size && !in.read(bin.data(), std::streamsize(size))) throw FileError(bin_path.string(), "cannot read the binary sidecar");
+  return bin;
+}
+
+/// A mesh's arrays into the sidecar, their offsets and sizes as attributes of `n`.
+inline void write_mesh(pugi::xml_node n, const TriangleMesh& m, std::ofstream& bin) {
+  n.append_attribute("name") = m.name.c_str();
+  n.append_attribute("vertices") = uint64_t(m.positions.size());
+  n.append_attribute("triangles") = uint64_t(m.triangle_count());
+  n.append_attribute("positions") = append_blob(bin, m.positions);
+  n.append_attribute("indices") = append_blob(bin, m.indices);
+  if (!m.normals.empty()) n.append_attribute("normals") = append_blob(bin, m.normals);
+  if (!m.uvs.empty()) n.append_attribute("uvs") = append_blob(bin, m.uvs);
+  if (!m.material_ids.empty()) n.append_attribute("material_ids") = append_blob(bin, m.material_ids);
+}
+
+/// The mesh write_mesh wrote (bounds checked: a hostile count or offset throws).
+inline TriangleMesh read_mesh(pugi::xml_node n, const std::vector<char>& bin, const std::string& ctx) {
+  TriangleMesh m;
+  m.name = n.attribute("name").as_string();
+  size_t nv = n.attribute("vertices").as_ullong(), nt = n.attribute("triangles").as_ullong();
+  if (nt > bin.size() || nv > bin.size()) throw Error(ctx + ": binary data is truncated");
+  read_blob(bin, n.attribute("positions").as_ullong(), nv, &m.positions, ctx);
+  read_blob(bin, n.attribute("indices").as_ullong(), 3 * nt, &m.indices, ctx);
+  if (n.attribute("normals")) read_blob(bin, n.attribute("normals").as_ullong(), nv, &m.normals, ctx);
+  if (n.attribute("uvs")) read_blob(bin, n.attribute("uvs").as_ullong(), nv, &m.uvs, ctx);
+  if (n.attribute("material_ids")) read_blob(bin, n.attribute("material_ids").as_ullong(), nt, &m.material_ids, ctx);
+  return m;
+}
+
+/// A material map as "from:to from:to".
+inline std::string fmt_map(const std::vector<std::pair<int32_t, int64_t>>& map) {
+  std::string s;
+  for (const auto& [from, to] : map) s += (s.empty() ? "" : " ") + std::to_string(from) + ":" + std::to_string(to);
+  return s;
+}
+
+inline std::vector<std::pair<int32_t, int64_t>> parse_map(const char* text, const std::string& ctx) {
+  std::vector<std::pair<int32_t, int64_t>> map;
+  std::istringstream is(text);
+  std::string item;
+  while (is >> item) {
+    size_t colon = item.find(':');
+    try {
+      if (colon == std::string::npos) throw std::invalid_argument("no colon");
+      map.emplace_back(int32_t(std::stol(item.substr(0, colon))), int64_t(std::stoll(item.substr(colon + 1))));
+    } catch (const std::exception&) {
+      throw Error(ctx + ": bad material_map entry '" + item + "'");
+    }
+  }
+  return map;
+}
+
+/// An in-memory image written as width / height / channels / offset attributes of `n`.
+inline std::shared_ptr<ImageData> read_pixels(pugi::xml_node n, const std::vector<char>& bin, const std::string& ctx) {
+  auto px = std::make_shared<ImageData>();
+  px->width = n.attribute("width").as_int();
+  px->height = n.attribute("height").as_int();
+  px->channels = n.attribute("channels").as_int();
+  if (px->width < 1 || px->height < 1 || px->channels < 1 || px->channels > 4 || px->width > 65536 ||
+      px->height > 65536)
+    throw Error(ctx + ": bad image size");
+  read_blob(bin, n.attribute("offset").as_ullong(), size_t(px->width) * px->height * px->channels, &px->pixels, ctx);
+  return px;
+}
+
+/// A camera as attributes of `n`: intrinsics (fx fy cx cy), width, height, world_from_camera.
+inline void write_camera(pugi::xml_node n, const PinholeCamera& cam) {
+  float k[4] = {cam.fx, cam.fy, cam.cx, cam.cy};
+  n.append_attribute("intrinsics") = fmt_floats(k, 4).c_str();
+  n.append_attribute("width") = cam.width;
+  n.append_attribute("height") = cam.height;
+  n.append_attribute("world_from_camera") = fmt_floats(cam.world_from_camera.m.data(), 16).c_str();
+}
+
+inline PinholeCamera read_camera(pugi::xml_node n) {
+  auto k = parse_floats(n.attribute("intrinsics").as_string(), 4, "camera intrinsics");
+  auto t = parse_floats(n.attribute("world_from_camera").as_string(), 16, "camera world_from_camera");
+  PinholeCamera c;
+  c.fx = k[0];
+  c.fy = k[1];
+  c.cx = k[2];
+  c.cy = k[3];
+  c.width = n.attribute("width").as_uint();
+  c.height = n.attribute("height").as_uint();
+  c.world_from_camera = Transform::from_row_major(t.data());
+  return c;
 }
 
 }  // namespace sg::xml

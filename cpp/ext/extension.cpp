@@ -212,22 +212,30 @@ std::vector<ExtensionLibrary> loaded_extension_libraries() {
   return l.libraries;
 }
 
+namespace {
+
+/// The declaration registered under `name` in `table` (and its source); throws naming `what`.
+template <class Decl>
+const Decl& find_declaration(const std::map<std::string, std::pair<const Decl*, std::string>>& table,
+                             const std::string& name, const char* what, std::string* source) {
+  auto it = table.find(name);
+  if (it == table.end()) throw Error(std::string("no extension ") + what + " '" + name + "' is loaded");
+  if (source) *source = it->second.second;
+  return *it->second.first;
+}
+
+}  // namespace
+
 const sg_ext_texture& extension_texture(const std::string& name, std::string* source) {
   Loaded& l = loaded();
   std::lock_guard<std::mutex> lock(l.mutex);
-  auto it = l.textures.find(name);
-  if (it == l.textures.end()) throw Error("no extension texture '" + name + "' is loaded");
-  if (source) *source = it->second.second;
-  return *it->second.first;
+  return find_declaration(l.textures, name, "texture", source);
 }
 
 const sg_ext_shape& extension_shape(const std::string& name, std::string* source) {
   Loaded& l = loaded();
   std::lock_guard<std::mutex> lock(l.mutex);
-  auto it = l.shapes.find(name);
-  if (it == l.shapes.end()) throw Error("no extension shape '" + name + "' is loaded");
-  if (source) *source = it->second.second;
-  return *it->second.first;
+  return find_declaration(l.shapes, name, "shape", source);
 }
 
 ExtensionArgs extension_args(const sg_ext_param* params, int count, const Params& p, const TextureLookup& textures) {
