@@ -246,7 +246,7 @@ def refresh_runtime_plugins() -> None:
                 continue
             rec.variants[name] = _params_record(info, scenario)
             if name not in choice.choices:
-                choice.choices.append(name)
+                choice.choices = sorted(choice.choices + [name])  # in plugin_names' order
     _TEXTURE_RECORD.clear()
 
 
