@@ -39,6 +39,13 @@ def _run(fn: Callable, frame: int, options: Dict[str, Any]) -> Dict[str, Any]:
     return fn(shared[0], shared[1], frame, *shared[2:], **options)
 
 
+def _alone_worker(conn: Any, shared: tuple, fn: Callable, frame: int, options: Dict[str, Any]) -> None:
+    """A frame in a process of its own: its result through `conn` (nothing when it dies)."""
+    _init_worker(shared)
+    conn.send(_run(fn, frame, options))
+    conn.close()
+
+
 def _died(frame: int, exitcode: Optional[int], journal: str = "") -> Dict[str, Any]:
     how = ""
     if exitcode is not None and exitcode < 0:
@@ -64,6 +71,7 @@ class LocalExecutor:
         self.workers = max(1, int(workers))
         self.recycle = max(1, int(recycle))
         self._pool: Any = None
+        self._proc: Any = None  # a frame's own process (_alone)
         #: Bytes pickled per frame (the task: function reference, frame, options) and once per
         #: worker (the shared part), measured by the last map().
         self.task_bytes = 0
@@ -132,28 +140,36 @@ class LocalExecutor:
                 yield r
 
     def _alone(self, fn: Callable, shared: tuple, frame: int, options: Dict[str, Any]) -> Dict[str, Any]:
-        """Renders one frame in a fresh process of its own: its result, or the report of its
-        death."""
-        from concurrent.futures.process import BrokenProcessPool
+        """Renders one frame in a fresh process of its own (not a pool: its exit status is
+        known for certain): its result, or the report of its death."""
+        import multiprocessing as mp
 
-        pool = self._new_pool(1, shared)
-        fut = pool.submit(_run, fn, frame, options)
-        # The worker process, taken now: a broken pool forgets its processes.
-        procs = list((getattr(pool, "_processes", None) or {}).values())
+        ctx = mp.get_context("spawn")
+        receive, send = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_alone_worker, args=(send, shared, fn, frame, options))
+        self._proc = proc
         try:
-            return fut.result()
-        except BrokenProcessPool:
-            for p in procs:
-                p.join(10.0)
-            return _died(frame, procs[0].exitcode if procs else None)
+            proc.start()
+            send.close()  # the child's end: a dead child leaves the pipe at end of file
+            try:
+                result = receive.recv()
+            except EOFError:
+                proc.join()
+                return _died(frame, proc.exitcode)
+            proc.join()
+            return result
         except BaseException:
-            self.shutdown()
+            if proc.is_alive():
+                proc.terminate()
             raise
         finally:
-            pool.shutdown(wait=True)
-            self._pool = None
+            receive.close()
+            self._proc = None
 
     def shutdown(self) -> None:
+        proc, self._proc = self._proc, None
+        if proc is not None and proc.is_alive():
+            proc.terminate()
         pool, self._pool = self._pool, None
         if pool is not None:
             procs = list((getattr(pool, "_processes", None) or {}).values())
