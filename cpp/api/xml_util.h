@@ -5,7 +5,11 @@
 
 #include <pugixml.hpp>
 
+#include <cerrno>
+#include <climits>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <memory>
@@ -76,17 +80,35 @@ inline void write_params(pugi::xml_node node, const ParamSet& ps) {
   }
 }
 
+/// The integer `text` (all of it, in [lo, hi]); throws sg::Error naming `what` otherwise.
+/// NOTE: strtoll with an end pointer and errno, not std::stoll, whose std::invalid_argument and
+/// std::out_of_range are not sg::Error (a hostile file must get a clear error, never a crash).
+inline int64_t parse_integer(const char* text, int64_t lo, int64_t hi, const std::string& what) {
+  errno = 0;
+  char* end = nullptr;
+  long long v = std::strtoll(text, &end, 10);
+  if (end == text || *end != '\0' || errno == ERANGE || v < lo || v > hi)
+    throw Error(what + ": '" + std::string(text).substr(0, 32) + "' is not an integer in [" + std::to_string(lo) +
+                ", " + std::to_string(hi) + "]");
+  return int64_t(v);
+}
+
 inline ParamSet read_params(pugi::xml_node node) {
   ParamSet ps;
   for (pugi::xml_node p : node.children("param")) {
     std::string name = p.attribute("name").as_string();
     std::string type = p.attribute("type").as_string();
     const char* v = p.attribute("value").as_string();
+    const std::string what = "parameter '" + name + "'";
     if (type == "bool") ps.set(name, std::string(v) == "true");
-    else if (type == "int") ps.set(name, int64_t(std::stoll(v)));
-    else if (type == "float") ps.set(name, std::strtod(v, nullptr));
-    else if (type == "string") ps.set(name, std::string(v));
-    else if (type == "texture") ps.set(name, TextureRef{uint32_t(std::stoul(v))});
+    else if (type == "int") ps.set(name, parse_integer(v, INT64_MIN, INT64_MAX, what));
+    else if (type == "float") {
+      char* end = nullptr;
+      double d = std::strtod(v, &end);
+      if (end == v || *end != '\0') throw Error(what + ": '" + std::string(v).substr(0, 32) + "' is not a number");
+      ps.set(name, d);
+    } else if (type == "string") ps.set(name, std::string(v));
+    else if (type == "texture") ps.set(name, TextureRef{uint32_t(parse_integer(v, 0, UINT32_MAX, what))});
     else if (type == "floats") {
       std::vector<double> d;
       std::istringstream is(v);
@@ -176,7 +198,8 @@ inline std::vector<std::pair<int32_t, int64_t>> parse_map(const char* text, cons
     size_t colon = item.find(':');
     try {
       if (colon == std::string::npos) throw std::invalid_argument("no colon");
-      map.emplace_back(int32_t(std::stol(item.substr(0, colon))), int64_t(std::stoll(item.substr(colon + 1))));
+      map.emplace_back(int32_t(parse_integer(item.substr(0, colon).c_str(), INT32_MIN, INT32_MAX, ctx)),
+                       parse_integer(item.substr(colon + 1).c_str(), INT64_MIN, INT64_MAX, ctx));
     } catch (const std::exception&) {
       throw Error(ctx + ": bad material_map entry '" + item + "'");
     }

@@ -282,9 +282,20 @@ def test_nan_at_creation_is_an_error(tmp_path):
         s.add_texture("nan_all")
 
 
-def test_the_header_is_installed_with_the_package():
-    assert os.path.isfile(os.path.join(extensions.header_dir(), "synthgen_ext.h"))
+def test_the_header_is_installed_with_the_package_and_its_example_works(tmp_path):
+    header = open(os.path.join(extensions.header_dir(), "synthgen_ext.h")).read()
     assert sg._core.EXTENSION_ABI_VERSION == 1
+    # The example of the header's comment, as a user would copy it.
+    start = header.index(" *   #include <math.h>")
+    end = header.index(" *   }\n", header.index("synthgen_extension(void) {", start)) + len(" *   }\n")
+    code = "\n".join(line[5:] for line in header[start:end].splitlines())
+    path = tmp_path / "stripes.c"
+    path.write_text(code)
+    s = sg.Scene()
+    assert s.load_extension(str(path))["textures"] == ["stripes"]
+    t = s.add_texture("stripes", {"frequency": 2.0, "color": [1.0, 0.5, 0.0]})
+    v = s.texture_values(t, np.zeros((2, 3), np.float32), uvs=np.array([[0.1, 0.0], [0.4, 0.0]], np.float32))
+    np.testing.assert_array_equal(v, [[1.0, 0.5, 0.0], [0.0, 0.0, 0.0]])  # sin(4 pi u) > 0 at 0.1, < 0 at 0.4
 
 
 # ---- consent: scene files and scenarios -----------------------------------------------------

@@ -11,6 +11,7 @@
  *
  * The library exports one function, synthgen_extension(), returning a static description:
  *
+ *   #include <math.h>
  *   #include <synthgen_ext.h>
  *   static const sg_ext_param stripes_params[] = {
  *     {"frequency", SG_EXT_FLOAT, {10}, 0, 1e4, "stripes per unit of u"},
