@@ -177,6 +177,11 @@ def test_dask_local_cluster_equals_local_run(reference, tmp_path):
         out = str(tmp_path / "dask")
         s = runner.run(TINY, out, count=4, scheduler=client, progress=False)
         assert s["rendered"] == 4 and not s["failures"], s.text()
+        # Two workers on this machine share its cores (a worker alone on a remote node would get
+        # 0: all of that node's cores, which the client cannot count).
+        from synthgen.run.executors import DaskExecutor
+
+        assert DaskExecutor(client).default_threads() == max(1, (os.cpu_count() or 1) // 2)
     ref = hashes(reference)
     for k, v in hashes(out).items():
         if k.startswith(("annotations/", "splits/")):

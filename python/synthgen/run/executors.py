@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 import pickle
 import signal
+import socket
 import time
 from collections import deque
 from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Sequence
@@ -76,6 +77,11 @@ class LocalExecutor:
         #: worker (the shared part), measured by the last map().
         self.task_bytes = 0
         self.shared_bytes = 0
+
+    def default_threads(self) -> int:
+        """Render threads per worker when none are asked: this machine's cores shared by the
+        workers (0, all cores, for one worker)."""
+        return max(1, (os.cpu_count() or 1) // self.workers) if self.workers > 1 else 0
 
     def _new_pool(self, workers: int, shared: tuple) -> Any:
         import multiprocessing as mp
@@ -196,6 +202,21 @@ class DaskExecutor:
         self._own = not isinstance(address, Client)
         self.task_bytes = 0
         self.shared_bytes = 0
+
+    def default_threads(self) -> int:
+        """Render threads per worker when none are asked. Workers on this machine (a
+        LocalCluster) share its cores; a worker elsewhere gets 0, all the cores of its node, which
+        is right for one worker process per node (docs/cluster.md: with several per node, pass
+        --threads). NOTE: the client cannot see a remote node's cores; using its own count, as
+        before, starved large nodes and oversubscribed small ones."""
+        workers = self.client.scheduler_info().get("workers", {}).values()
+        local = {"127.0.0.1", "::1", "localhost", socket.gethostname()}
+        try:
+            local.add(socket.gethostbyname(socket.gethostname()))
+        except OSError:
+            pass
+        here = sum(1 for w in workers if w.get("host") in local)
+        return max(1, (os.cpu_count() or 1) // here) if here > 1 else 0
 
     def map(self, fn: Callable, shared: tuple, frames: Sequence[int], options: Optional[Dict[str, Any]] = None,
             alone_options: Optional[Dict[str, Any]] = None,

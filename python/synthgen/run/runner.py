@@ -13,7 +13,7 @@ from __future__ import annotations
 import glob
 import os
 import time
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, Optional, Sequence, Tuple
 
 from .. import outputs
 from .._core import SynthgenError
@@ -111,11 +111,11 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     for k in broken:  # incomplete: rendered again below (they are not in `done`)
         os.unlink(os.path.join(out_dir, "meta", frame_name(k) + ".json"))
     todo = [k for k in frames if not (resume and k in done)] if only is None else frames
-    if threads is None:
-        threads = max(1, (os.cpu_count() or 1) // max(1, workers)) if (workers > 1 or scheduler) else 0
+    executor = DaskExecutor(scheduler) if scheduler is not None else LocalExecutor(workers, recycle)
+    if threads is None:  # cores / workers on this machine; a cluster's worker alone on its node: all of them
+        threads = executor.default_threads()
     if sc.spec["render"]["threads"]:
         threads = sc.spec["render"]["threads"]
-    executor = DaskExecutor(scheduler) if scheduler is not None else LocalExecutor(workers, recycle)
     results, failures = [], []
     interrupted = False
     t0 = time.perf_counter()
