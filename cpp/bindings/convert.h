@@ -61,6 +61,8 @@ void bind_geometry(py::module_& m);       ///< surface_distances (geometry.cpp)
 void bind_extensions(py::module_& m, py::class_<Scene>& scene);
 /// Scene's change journal: begin_journal, save_journal, _replay, ... (journal.cpp).
 void bind_journal(py::class_<Scene>& scene);
+/// Scene.instance_coverage: amodal masks from one ray per pixel (queries.cpp).
+void bind_queries(py::class_<Scene>& scene);
 /// Scene::estimate_texture_resolution's rows as {'textures', 'camera_rays', 'bounce_rays'} (texture_lod.cpp).
 py::dict texture_estimate_to_py(const std::vector<TextureResolution>& res, const TextureEstimate& raw);
 
