@@ -3,6 +3,7 @@
 // bind_* functions of the other binding files.
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,9 +45,15 @@ inline py::array_t<float> transform_to_py(const Transform& t) {
   return a;
 }
 
-// Wraps a vector owned by `owner` as a numpy array without copying.
+// Wraps a vector owned by `owner` as a numpy array without copying; a buffer the render left
+// empty (Film::allocate's labels_only) as zeros of that shape.
 template <class T>
 py::array wrap(std::shared_ptr<Film> owner, std::vector<T>& v, std::vector<py::ssize_t> shape) {
+  if (v.empty()) {
+    py::array_t<T> zeros(shape);
+    std::fill(zeros.mutable_data(), zeros.mutable_data() + zeros.size(), T(0));
+    return std::move(zeros);
+  }
   auto* holder = new std::shared_ptr<Film>(owner);
   py::capsule cap(holder, [](void* p) { delete static_cast<std::shared_ptr<Film>*>(p); });
   return py::array_t<T>(shape, v.data(), cap);
