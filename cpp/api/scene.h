@@ -220,6 +220,19 @@ class Scene {
   /// with respect to the GIL: touches no Python objects.
   void render(const RenderSettings& settings, Film* film);
 
+  /// Amodal masks of many instances from one ray per pixel (api/scene_queries.cpp): per pixel
+  /// of `camera` (row-major; the scene's camera is not changed), ceil(n / 64) words whose bit
+  /// i % 64 of word i / 64 is set when the ray through the pixel centre hits `instances[i]`
+  /// anywhere along it (Accel::all_hits) -- exactly the pixels of that instance's id in a
+  /// label-only render of it alone (every other instance hidden): cut-outs are respected, a
+  /// hidden listed instance covers nothing, instances not listed are ignored. With `first_hit`,
+  /// only where instances[i] is the ray's first hit among all shown instances (its visible
+  /// mask: where a label-only render shows its id). Rays are traced only in the pixels where
+  /// a listed instance's bounds project. Commits pending edits first; `threads` 0: all. Throws
+  /// sg::Error for an unknown or repeated instance id.
+  std::vector<uint64_t> instance_coverage(const PinholeCamera& camera, const std::vector<uint32_t>& instances,
+                                          uint32_t threads = 0, bool first_hit = false);
+
   /// The texture resolution estimate for the current camera (integrator/texture_estimate.h),
   /// committing pending edits first: one entry per image texture, by texture id.
   std::vector<TextureResolution> estimate_texture_resolution(const TextureEstimateSettings& settings,

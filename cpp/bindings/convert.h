@@ -3,6 +3,7 @@
 // bind_* functions of the other binding files.
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -44,9 +45,15 @@ inline py::array_t<float> transform_to_py(const Transform& t) {
   return a;
 }
 
-// Wraps a vector owned by `owner` as a numpy array without copying.
+// Wraps a vector owned by `owner` as a numpy array without copying; a buffer the render left
+// empty (Film::allocate's labels_only) as zeros of that shape.
 template <class T>
 py::array wrap(std::shared_ptr<Film> owner, std::vector<T>& v, std::vector<py::ssize_t> shape) {
+  if (v.empty()) {
+    py::array_t<T> zeros(shape);
+    std::fill(zeros.mutable_data(), zeros.mutable_data() + zeros.size(), T(0));
+    return std::move(zeros);
+  }
   auto* holder = new std::shared_ptr<Film>(owner);
   py::capsule cap(holder, [](void* p) { delete static_cast<std::shared_ptr<Film>*>(p); });
   return py::array_t<T>(shape, v.data(), cap);
@@ -61,6 +68,8 @@ void bind_geometry(py::module_& m);       ///< surface_distances (geometry.cpp)
 void bind_extensions(py::module_& m, py::class_<Scene>& scene);
 /// Scene's change journal: begin_journal, save_journal, _replay, ... (journal.cpp).
 void bind_journal(py::class_<Scene>& scene);
+/// Scene.instance_coverage: amodal masks from one ray per pixel (queries.cpp).
+void bind_queries(py::class_<Scene>& scene);
 /// Scene::estimate_texture_resolution's rows as {'textures', 'camera_rays', 'bounce_rays'} (texture_lod.cpp).
 py::dict texture_estimate_to_py(const std::vector<TextureResolution>& res, const TextureEstimate& raw);
 

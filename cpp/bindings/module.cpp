@@ -244,6 +244,7 @@ Edits accumulate; commit() applies only what changed (only new or edited meshes 
 a BVH build). render() commits pending edits first.)doc");
   bind_extensions(m, scene_class);
   bind_journal(scene_class);
+  bind_queries(scene_class);
   scene_class
       .def(py::init<>())
       .def("add_mesh",

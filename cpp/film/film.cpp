@@ -10,13 +10,12 @@
 
 namespace sg {
 
-void Film::allocate(uint32_t w, uint32_t h, bool diff) {
+void Film::allocate(uint32_t w, uint32_t h, bool diff, bool labels_only) {
   width = w;
   height = h;
   size_t n = size_t(w) * h;
   constexpr float inf = std::numeric_limits<float>::infinity();
   try {
-    rgb.assign(3 * n, 0.f);
     alpha.assign(n, 0.f);
     depth.assign(n, inf);
     distance.assign(n, inf);
@@ -24,10 +23,18 @@ void Film::allocate(uint32_t w, uint32_t h, bool diff) {
     albedo.assign(3 * n, 0.f);
     instance_id.assign(n, 0u);
     class_id.assign(n, 0u);
-    for (auto* v : {&rgb_even, &rgb_odd, &variance, &albedo_even, &albedo_odd, &normal_even, &normal_odd})
-      v->assign(3 * n, 0.f);
-    for (auto* v : {&depth_even, &depth_odd}) v->assign(n, 0.f);
-    sample_count.assign(n, 0u);
+    // NOTE: a label-only render (layout checks: a few per frame) needs 44 of the 152 bytes a
+    // pixel: zero-filling the rest cost more than its rays on a padded canvas.
+    auto color = {&rgb, &rgb_even, &rgb_odd, &variance, &albedo_even, &albedo_odd, &normal_even, &normal_odd};
+    if (labels_only) {
+      for (auto* v : color) std::vector<float>().swap(*v);
+      for (auto* v : {&depth_even, &depth_odd}) std::vector<float>().swap(*v);
+      std::vector<uint32_t>().swap(sample_count);
+    } else {
+      for (auto* v : color) v->assign(3 * n, 0.f);
+      for (auto* v : {&depth_even, &depth_odd}) v->assign(n, 0.f);
+      sample_count.assign(n, 0u);
+    }
     std::vector<float>().swap(rgb_noisy);
     differential = diff;
     for (auto* v : {&synthetic_rgb, &catcher_with, &catcher_without, &behind_synthetic}) {
@@ -38,8 +45,9 @@ void Film::allocate(uint32_t w, uint32_t h, bool diff) {
     else std::vector<float>().swap(synthetic_alpha);
   } catch (const std::bad_alloc&) {
     *this = Film();
+    const size_t bytes = n * (44 + (labels_only ? 0 : 108) + (diff ? 52 : 0));  // per pixel: see above
     throw Error("render: cannot allocate the buffers of a " + std::to_string(w) + " x " + std::to_string(h) +
-                " image (" + std::to_string(n * (diff ? 204 : 152) / (1 << 20)) + " MiB): not enough memory");
+                " image (" + std::to_string(bytes / (1 << 20)) + " MiB): not enough memory");
   }
 }
 

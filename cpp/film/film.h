@@ -77,7 +77,10 @@ struct Film {
   std::vector<float> behind_synthetic;  ///< H x W x 3, synthetic samples' radiance without the objects
   RenderStats stats;
 
-  void allocate(uint32_t w, uint32_t h, bool differential = false);
+  /// Sizes and clears the buffers for a w x h render. `labels_only` (a label-only render):
+  /// only the label buffers (alpha, depth, distance, normal, albedo, the ids); rgb, the noise
+  /// and feature buffers and sample_count are left empty (the bindings show them as zeros).
+  void allocate(uint32_t w, uint32_t h, bool differential = false, bool labels_only = false);
 };
 
 /// RenderSettings::denoise: moves rgb to rgb_noisy and writes the denoised image (film/denoise.h,

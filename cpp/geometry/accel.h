@@ -66,6 +66,9 @@ enum class RayLayer : uint32_t { all = 0xffffffffu, catchers = 0x2u };
 /// installs the test (Accel::set_alpha_test).
 using AlphaTest = bool (*)(const void* user, uint32_t inst, uint32_t prim, float u, float v);
 
+/// Accel::all_hits' callback: one accepted hit of the ray on instance slot `inst`.
+using HitVisitor = void (*)(void* user, uint32_t inst);
+
 /// Distance from each point to the closest point of the mesh's surface: exact (closest point
 /// on each candidate triangle), with Embree point queries over a BVH of the triangles built for
 /// the call. Measures how far a model's level of detail strays from its finest level
@@ -104,6 +107,13 @@ class Accel {
   /// packets (at most 3 active lanes) are traced as single rays.
   void intersect_packet(const RayPacket& rays, HitPacket* hits, RayLayer layer = RayLayer::all) const;
   void occluded_packet(const RayPacket& rays, bool occluded[k_packet_size], RayLayer layer = RayLayer::all) const;
+  /// Every hit along the ray in [0, t_max], not only the closest: `visit` is called for each
+  /// candidate hit that passes the alpha test (a triangle, or a user shape's closest hit), with
+  /// its instance slot; an instance may be reported more than once, in no particular order.
+  /// An instance is reported exactly when intersect() would find a hit on it were it the only
+  /// instance in the scene (same ray, same triangle tests, same cut-outs): amodal masks of
+  /// every object from one ray per pixel (Scene::instance_coverage). Deterministic.
+  void all_hits(const Ray& ray, HitVisitor visit, void* user, RayLayer layer = RayLayer::all) const;
 
   /// Number of bottom-level (per-mesh) BVH builds since construction.
   uint64_t mesh_builds() const { return m_mesh_builds; }

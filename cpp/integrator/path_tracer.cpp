@@ -515,7 +515,7 @@ void render_path_traced(const RenderScene& scene, const RenderSettings& settings
   scene.camera.validate();
   const uint32_t w = scene.camera.width, h = scene.camera.height;
   const bool differential = scene.has_catchers && !settings.labels_only;
-  film->allocate(w, h, differential);
+  film->allocate(w, h, differential, settings.labels_only);
   PathTracer pt(scene, settings);
   std::atomic<uint64_t> rays{0}, nans{0};
   auto t0 = std::chrono::steady_clock::now();

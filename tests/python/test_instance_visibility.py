@@ -106,3 +106,18 @@ def test_textures_and_materials_can_be_removed_when_unused(tmp_path):
     s.save(path)
     t2 = sg.Scene.load(path)
     np.testing.assert_array_equal(t2.render(spp=2, seed=1).rgb, r.rgb)
+
+
+def test_label_only_render_leaves_colour_buffers_out():
+    """A label-only render allocates its labels only; the colour, noise and feature buffers read
+    as zeros of their shapes (as they were when they were allocated and left at 0)."""
+    s, front, back, light = _scene()
+    r = s.render(spp=1, labels_only=True)
+    for name, shape in (("rgb", (72, 96, 3)), ("rgb_even", (72, 96, 3)), ("variance", (72, 96, 3)),
+                        ("albedo_odd", (72, 96, 3)), ("depth_odd", (72, 96)), ("sample_count", (72, 96))):
+        a = np.asarray(getattr(r, name))
+        assert a.shape == shape and not a.any(), name
+    assert np.asarray(r.sample_count).dtype == np.uint32
+    assert np.asarray(r.instance_id).any() and np.isfinite(np.asarray(r.depth)).any() and np.asarray(r.albedo).any()
+    full = s.render(spp=2, max_depth=2)
+    assert np.asarray(full.rgb_even).any() and np.asarray(full.sample_count).min() == 2

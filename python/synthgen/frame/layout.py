@@ -1,9 +1,10 @@
 """Placing a frame's objects on the ground until each is visible enough.
 
 A layout draws a free spot per object in the placement region (footprint circles do not
-overlap when asked), shows the objects and checks, with label-only renders (one camera ray
-per pixel), that every object has ``min_pixels`` visible pixels and a visible fraction of
-its amodal mask (the object rendered alone on a padded canvas) within the asked range.
+overlap when asked), shows the objects and checks, with one camera ray per pixel
+(Scene.instance_coverage: the pixels a label-only render gives each object), that every
+object has ``min_pixels`` visible pixels and a visible fraction of its amodal mask (the object
+as rendered alone on a padded canvas: every object's from one pass) within the asked range.
 Layouts are retried up to ``max_retries`` times; the best one is kept and objects that
 still fail are dropped (with the reason in the metadata).
 """
@@ -19,7 +20,8 @@ from .._core import PinholeCamera, Scene
 from ..scene import primitives as P
 from .records import PlacedObject
 
-__all__ = ["TRUNCATION_PAD", "FrameView", "Layout", "search_layout", "amodal_pixels"]
+__all__ = ["TRUNCATION_PAD", "FrameView", "Layout", "search_layout", "amodal_pixels", "amodal_masks",
+           "bit_counts", "bit_mask"]
 
 #: Objects may extend this far beyond the image on each side (fraction of the image size)
 #: and still be measured for truncation.
@@ -230,23 +232,55 @@ def _depth(objects: Sequence[PlacedObject], k: int) -> int:
     return n
 
 
+def bit_counts(bits: np.ndarray, n: int) -> np.ndarray:
+    """Pixels per instance (the first ``n``) of a Scene.instance_coverage array."""
+    if n == 0:
+        return np.zeros(0, np.int64)
+    flat = bits.reshape(-1, bits.shape[-1])
+    flat = flat[flat.any(axis=1)]  # the few pixels some instance covers
+    if not len(flat):
+        return np.zeros(n, np.int64)
+    unpacked = np.unpackbits(flat.astype("<u8", copy=False).view(np.uint8), axis=1, bitorder="little")
+    return unpacked[:, :n].sum(axis=0, dtype=np.int64)
+
+
+def bit_mask(bits: np.ndarray, i: int) -> np.ndarray:
+    """The mask (bool, H x W) of instance ``i`` of a Scene.instance_coverage array."""
+    return ((bits[..., i // 64] >> np.uint64(i % 64)) & np.uint64(1)).astype(bool)
+
+
+def _padded(camera: PinholeCamera, resolution: Tuple[int, int]) -> Tuple[PinholeCamera, int, int]:
+    """(the camera on a canvas padded by TRUNCATION_PAD on every side, the padding in x, in y)."""
+    w, h = resolution
+    pw, ph = int(round(TRUNCATION_PAD * w)), int(round(TRUNCATION_PAD * h))
+    K = np.asarray(camera.K, np.float64)
+    return (PinholeCamera(float(K[0, 0]), float(K[1, 1]), float(K[0, 2]) + pw, float(K[1, 2]) + ph,
+                          w + 2 * pw, h + 2 * ph, np.asarray(camera.world_from_camera, np.float64)), pw, ph)
+
+
+def amodal_masks(view: FrameView, camera: PinholeCamera, ks: Sequence[int],
+                 masks: Sequence[int] = ()) -> Dict[int, Tuple[Any, ...]]:
+    """{k: (amodal pixels inside the image, amodal pixels on a canvas padded by TRUNCATION_PAD on
+    every side)} of objects ``ks``, each as if rendered alone (the others, posts and ground
+    hidden), from one ray per pixel (Scene.instance_coverage); objects in ``masks`` also get
+    their padded mask (bool). Shows the objects ``ks``."""
+    ks = list(ks)
+    for k in ks:
+        view.scene.set_instance_visible(view.objects[k].instance, True)
+    padded, pw, ph = _padded(camera, view.resolution)
+    w, h = view.resolution
+    bits = view.scene.instance_coverage(padded, [view.objects[k].instance for k in ks], view.threads)
+    total = bit_counts(bits, len(ks))
+    inside = bit_counts(bits[ph:ph + h, pw:pw + w], len(ks))
+    wanted = set(masks)
+    return {k: (int(inside[i]), int(total[i])) + ((bit_mask(bits, i),) if k in wanted else ())
+            for i, k in enumerate(ks)}
+
+
 def amodal_pixels(view: FrameView, camera: PinholeCamera, k: int, mask: bool = False) -> Tuple[Any, ...]:
     """(amodal pixels inside the image, amodal pixels on a canvas padded by TRUNCATION_PAD on
     every side) of object k rendered alone; with ``mask``, also that padded mask (bool)."""
-    w, h = view.resolution
-    pw, ph = int(round(TRUNCATION_PAD * w)), int(round(TRUNCATION_PAD * h))
-    K = np.asarray(camera.K, np.float64)
-    padded = PinholeCamera(float(K[0, 0]), float(K[1, 1]), float(K[0, 2]) + pw, float(K[1, 2]) + ph,
-                           w + 2 * pw, h + 2 * ph, np.asarray(camera.world_from_camera, np.float64))
-    for i, o in enumerate(view.objects):
-        view.scene.set_instance_visible(o.instance, i == k)
-    for d in view.decor:
-        view.scene.set_instance_visible(d, False)
-    if view.ground is not None:
-        view.scene.set_instance_visible(view.ground, False)
-    pixels = np.asarray(view.labels(padded).instance_id) == k + 1
-    inside = int(pixels[ph:ph + h, pw:pw + w].sum())
-    return (inside, int(pixels.sum())) + ((pixels,) if mask else ())
+    return amodal_masks(view, camera, [k], [k] if mask else ())[k]
 
 
 def _put(view: FrameView, o: PlacedObject, spot: Spot) -> None:
@@ -279,21 +313,23 @@ def search_layout(view: FrameView, camera: PinholeCamera, placement: Mapping[str
             if spot is not None:
                 _put(view, o, spot)
         view.show([s is not None for s in spots])
-        ids = np.asarray(view.labels(camera).instance_id)
-        counts = np.bincount(ids.ravel(), minlength=len(objects) + 1)
+        # Visible pixels: where each object is the first hit (its id in a label-only render).
+        counts = bit_counts(view.scene.instance_coverage(camera, [o.instance for o in objects], view.threads,
+                                                         first_hit=True), len(objects))
         fails = []
         for k, spot in enumerate(spots):
             if spot is None:
                 fails.append((k, _no_spot_reason(objects[k], view.photo is not None)))
-            elif counts[k + 1] < max(1 if objects[k].spec.labelled else 0, limits[k]["min_pixels"]):
-                fails.append((k, f"{int(counts[k + 1])} visible pixels < min_pixels {limits[k]['min_pixels']}"))
+            elif counts[k] < max(1 if objects[k].spec.labelled else 0, limits[k]["min_pixels"]):
+                fails.append((k, f"{int(counts[k])} visible pixels < min_pixels {limits[k]['min_pixels']}"))
         if need_amodal and not fails:
-            for k in range(len(objects)):
+            checked = [k for k in range(len(objects)) if limits[k]["min_visible_fraction"] > 0.0
+                       or limits[k]["max_visible_fraction"] < 1.0]
+            amodal = amodal_masks(view, camera, checked)
+            for k in checked:
                 lim = limits[k]
-                if lim["min_visible_fraction"] <= 0.0 and lim["max_visible_fraction"] >= 1.0:
-                    continue
-                inside, _ = amodal_pixels(view, camera, k)
-                frac = counts[k + 1] / inside if inside else 0.0
+                inside = amodal[k][0]
+                frac = counts[k] / inside if inside else 0.0
                 if frac < lim["min_visible_fraction"]:
                     fails.append((k, f"visible fraction {frac:.3f} < {lim['min_visible_fraction']}"))
                 elif frac > lim["max_visible_fraction"]:

@@ -7,7 +7,7 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from ..scene.lod import choose_level
-from .layout import FrameView, amodal_pixels
+from .layout import FrameView, amodal_masks, amodal_pixels
 from .records import PlacedObject
 from .resources import Shapes
 
@@ -16,11 +16,11 @@ __all__ = ["levels_of_detail", "amodal_and_levels"]
 
 def amodal_and_levels(shapes: Shapes, view: FrameView, objects: List[PlacedObject], keep: List[bool], camera: Any,
                       rs: Mapping[str, Any]) -> Tuple[Dict[int, Tuple[int, int]], Optional[Dict[str, Any]]]:
-    """The amodal pixels (layout.amodal_pixels) of each shown labelled object, and the frame's
-    :func:`levels_of_detail` by the render settings ``rs`` (the finest levels' amodal masks
-    are what the coarser ones' are measured against)."""
-    found = {k: amodal_pixels(view, camera, k, mask=bool(objects[k].shape.lod_meshes))
-             for k in range(len(objects)) if keep[k] and objects[k].spec.labelled}
+    """The amodal pixels (layout.amodal_masks: all from one pass) of each shown labelled object,
+    and the frame's :func:`levels_of_detail` by the render settings ``rs`` (the finest levels'
+    amodal masks are what the coarser ones' are measured against)."""
+    ks = [k for k in range(len(objects)) if keep[k] and objects[k].spec.labelled]
+    found = amodal_masks(view, camera, ks, [k for k in ks if objects[k].shape.lod_meshes])
     masks = {k: v[2] for k, v in found.items() if len(v) > 2}
     return ({k: v[:2] for k, v in found.items()},
             levels_of_detail(shapes, view, objects, keep, camera, masks, rs["geometry_lod"], rs["geometry_lod_iou"]))

@@ -256,7 +256,6 @@ class FrameRenderer:
             view.photo = PhotoPlacement(fp, camera, bg["min_distance"], bg["max_distance"], bg["max_real_overlap"])
         layout = search_layout(view, camera, sc.spec["placement"], frame_rng(sc.seed, frame, 1))
         keep = layout.kept()
-        t_layout = time.perf_counter()
 
         # Unlabelled objects (label: false) keep their ids for the layout's checks, then become
         # background in the labels: class 0, instance 0.
@@ -264,6 +263,7 @@ class FrameRenderer:
             if not o.spec.labelled:
                 self.scene.set_instance_labels(o.instance, 0, 0)
         amodal, geometry_lod = amodal_and_levels(self.shapes, view, objects, keep, camera, sc.spec["render"])
+        t_layout = time.perf_counter()  # the layout stage: its checks, amodal masks and levels of detail
         view.show(keep)
         render_seed = int(np.random.SeedSequence([sc.seed, int(frame), 3]).generate_state(1, np.uint64)[0])
         if fp is not None and sc.spec["background"]["dome"]:
@@ -291,9 +291,11 @@ class FrameRenderer:
         exposure = exposure_scale(spec.post)
         for c in weather_ctx.values():
             exposure *= c.exposure
+        c_render = time.process_time()
         res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure,
                                 **{k: rs[k] for k in RENDER_KEYS if k != "threads"})
         t_render = time.perf_counter()
+        c_render = time.process_time() - c_render  # the path tracer's CPU time (all its threads)
 
         arrays = {"rgb": np.asarray(res.rgb), "depth": np.asarray(res.depth),
                   "instance_id": np.asarray(res.instance_id), "class_id": np.asarray(res.class_id),
@@ -383,7 +385,8 @@ class FrameRenderer:
             meta["real_objects"] = real_object_records(fp, arrays["instance_id"], sc.class_names)
         if spec.post:
             meta["post"] = [{"type": p.type, "params": dict(p.params)} for p in spec.post]
-        timings = {"update_s": t_update - f.t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout}
+        timings = {"update_s": t_update - f.t0, "layout_s": t_layout - t_update, "render_s": t_render - t_layout,
+                   "render_cpu_s": c_render}
         if rs["texture_lod"]:
             timings["texture_lod_s"] = float(res.stats["texture_lod_time_s"])
         if fp is not None:  # compositing, camera matching and labels of a photo frame

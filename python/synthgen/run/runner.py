@@ -46,7 +46,8 @@ def remove_temporaries(out_dir: str) -> int:
 
 
 class RunSummary(dict):
-    """frames, failures (frame, reason), mean seconds per frame and per stage."""
+    """frames, failures (frame, reason), mean seconds per frame and per stage (wall time:
+    ``stage_s``; CPU time of the workers: ``stage_cpu_s``, ``non_render_fraction``)."""
 
     def text(self, debug: bool = False) -> str:
         """The summary; with ``debug``, each failed frame's traceback too."""
@@ -62,6 +63,10 @@ class RunSummary(dict):
             st = ", ".join(f"{k[:-2]} {v:.3f}" for k, v in self["stage_s"].items())
             lines.append(f"mean seconds/frame: {self['mean_s_per_frame']:.3f} (per stage: {st}); "
                          f"wall {self['wall_s']:.1f} s, {self['frames_per_s']:.3f} frames/s")
+            if "stage_cpu_s" in self:
+                c = self["stage_cpu_s"]
+                lines.append(f"mean CPU seconds/frame: {c['total_s']:.3f} (path tracing {c['render_s']:.3f}, other "
+                             f"{c['other_s']:.3f}: {100 * self['non_render_fraction']:.1f}%)")
         dropped = self.get("dropped", [])
         if dropped:
             n = sum(len(d["objects"]) for d in dropped)
@@ -163,6 +168,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         for k, v in r["timings"].items():
             stages[k] = stages.get(k, 0.0) + v
     m = max(1, len(results))
+    cpu, render_cpu = stages.pop("cpu_s", 0.0), stages.pop("render_cpu_s", 0.0)
     summary = RunSummary(
         rendered=len(results), skipped=len(frames) - len(todo),
         failures=[{"frame": f["frame"], "error": f["error"], "traceback": f.get("traceback", ""),
@@ -170,6 +176,10 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         wall_s=wall, frames_per_s=len(results) / wall if wall > 0 else 0.0,
         mean_s_per_frame=stages.get("total_s", 0.0) / m,
         stage_s={k: v / m for k, v in stages.items() if k != "total_s"},
+        # CPU seconds per frame in the workers (every thread): the whole frame, its path tracing
+        # and the rest (scene set-up, layout checks, labels, writing); the rest's share of it.
+        stage_cpu_s={"total_s": cpu / m, "render_s": render_cpu / m, "other_s": (cpu - render_cpu) / m},
+        non_render_fraction=(cpu - render_cpu) / cpu if cpu > 0 else 0.0,
         interrupted=interrupted, temporaries_removed=removed, complete=len(complete),
         incomplete=[{"frame": k, "reason": r} for k, r in broken.items()], aborted=aborted,
         dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),

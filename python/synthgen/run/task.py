@@ -72,7 +72,9 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0, 
                 journal_first: bool = False) -> Dict[str, Any]:
     """Renders and writes one frame in the calling process, reusing this process's
     FrameRenderer for the same scenario. Workers receive the validated scenario itself
-    (pickled), never a path they would read again. Returns {frame, ok, error, timings}.
+    (pickled), never a path they would read again. Returns {frame, ok, error, timings}: wall
+    seconds per stage, and CPU seconds of the frame (``cpu_s``) and of its path tracing
+    (``render_cpu_s``).
 
     The scene records its change journal from the frame's start (Scene.begin_journal): a frame
     that fails leaves it in ``failed/`` (``journal`` in the result: ``synthgen replay`` renders
@@ -87,6 +89,7 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0, 
             load_image_plugin()
             fr = FrameRenderer(scenario, threads)
             _WORKER.update(renderer=fr, key=key, frames=0)
+        c0 = time.process_time()
         fr.scene.begin_journal()
         failed_path = journal_path(out_dir, frame, True)
         if journal_first:
@@ -108,6 +111,8 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0, 
         _WORKER["frames"] += 1
         del arrays
         release_free_memory()
+        # The frame's CPU time in this process, every thread's (the path tracer's: render_cpu_s).
+        timings["cpu_s"] = time.process_time() - c0
         dropped = [{"index": o["index"], "class": o["class"], "reason": o["dropped"]}
                    for o in meta["objects"] if o.get("dropped")]
         return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid(),
