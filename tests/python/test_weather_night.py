@@ -277,3 +277,30 @@ def test_dusk_and_night_are_refused_over_photos_and_documented():
         assert msgs and "photo" in msgs[0]
     doc = weather.schema().doc
     assert "light (dusk, night)" in doc
+
+
+def test_layout_never_sees_the_previous_frames_street_lights(tmp_path, monkeypatch):
+    """A worker's scene keeps the weather geometry of the frame it rendered last (hidden, for the
+    next night): the next frame's layout checks must not see the poles that were shown, or the
+    frame would depend on what its worker rendered before (not bit-identical when rendered
+    alone)."""
+    from synthgen.frame import renderer as R
+    from synthgen.scenario.load import load_scenario
+
+    (tmp_path / "s.yaml").write_text(BASE.format(
+        w=48, h=32, eye="[0, 14, -12]", target="[0, 0, 3]", objects=BOX, region="[-6.5, 5.5, -5.5, 6.5]", spp=1,
+        weather="weather: {night: {street_lights: {offset: 4, spacing: 5, sides: both}}}"))
+    fr = R.FrameRenderer(load_scenario(str(tmp_path / "s.yaml")), threads=1)
+    fr.render(0)
+    pools = [i for p in fr.weather_pools.values() for i in p.ids]
+    assert any(fr.scene.instance_visible(i) for i in pools)  # frame 0's poles stand in the scene
+    seen = []
+    search = R.search_layout
+
+    def spy(view, *a, **k):
+        seen.append([i for i in pools if fr.scene.instance_visible(i)])
+        return search(view, *a, **k)
+
+    monkeypatch.setattr(R, "search_layout", spy)
+    fr.prepare(1)
+    assert seen == [[]]

@@ -245,6 +245,7 @@ class FrameRenderer:
         self._set_ground(spec)
         objects = self._set_objects(spec)
         previous.release()
+        self._clear_weather()  # the previous frame's weather geometry must not take part in this layout
         self.objects, self.camera = objects, camera  # the frame's placed objects and camera (tools, tests)
         t_update = time.perf_counter()
 
@@ -398,12 +399,7 @@ class FrameRenderer:
         """The frame's weather conditions applied to the scene (the previous frame's medium
         removed first, and the conditions' geometry hidden); {condition key: its context} for
         their image-space steps and meta."""
-        if self.scene.medium_type() is not None:
-            self.scene.clear_medium()
-        for pool in self.weather_pools.values():
-            for inst in pool.ids:
-                if self.scene.instance_visible(inst):
-                    self.scene.set_instance_visible(inst, False)
+        self._clear_weather()
         out = {}
         for key, params in spec.weather:
             ctx = weather.WeatherContext(self, weather.condition_rng(self.sc.seed, spec.frame, key), fp,
@@ -411,6 +407,17 @@ class FrameRenderer:
             ctx.extra.update(weather.condition(key).apply(ctx, params) or {})
             out[key] = ctx
         return out
+
+    def _clear_weather(self) -> None:
+        """Removes the previous frame's medium and hides its weather geometry (street lights ...),
+        so that nothing of it reaches this frame's layout checks: a frame must not depend on what
+        its worker rendered before."""
+        if self.scene.medium_type() is not None:
+            self.scene.clear_medium()
+        for pool in self.weather_pools.values():
+            for inst in pool.ids:
+                if self.scene.instance_visible(inst):
+                    self.scene.set_instance_visible(inst, False)
 
     @staticmethod
     def _noise(res: Any, exposure: float) -> Optional[Dict[str, float]]:
