@@ -206,8 +206,8 @@ class DaskExecutor:
     def default_threads(self) -> int:
         """Render threads per worker when none are asked. Workers on this machine (a
         LocalCluster) share its cores; a worker elsewhere gets 0, all the cores of its node, which
-        is right for one worker process per node (docs/cluster.md: with several per node, pass
-        --threads). NOTE: the client cannot see a remote node's cores; using its own count, as
+        is right for one worker process per node (docs/cluster.md: several per node are faster;
+        then pass --threads). NOTE: the client cannot see a remote node's cores; using its own count, as
         before, starved large nodes and oversubscribed small ones."""
         workers = self.client.scheduler_info().get("workers", {}).values()
         local = {"127.0.0.1", "::1", "localhost", socket.gethostname()}
