@@ -215,10 +215,20 @@ class PixelSampler {
   /// instead of filling the square, and renders at 16-32 spp were biased by up to 1 % of a
   /// 32 x 32 block's radiance in the Cornell box, the same for every seed
   /// (tests/python/test_sampler_bias.py).
-  Vec2f get_2d_keyed(uint64_t h) const {
-    uint32_t index = permute_index_masked(m_sample, m_spp, m_mask, uint32_t(h));
-    uint32_t x = reverse_bits32(laine_karras(index, uint32_t(h >> 32)));
-    uint32_t y = reverse_bits32(laine_karras(sobol_dim1_reversed(index), uint32_t(mix64(h) >> 32)));
+  Vec2f get_2d_keyed(uint64_t h) const { return get_2d_keyed(PairSeeds(h)); }
+
+  /// The three 32-bit seeds get_2d_keyed derives from a pair key: the sample order's
+  /// permutation and the two coordinates' scrambles. Lanes that share a key share these.
+  struct PairSeeds {
+    uint32_t permutation = 0, x = 0, y = 0;
+    PairSeeds() = default;
+    explicit PairSeeds(uint64_t h) : permutation(uint32_t(h)), x(uint32_t(h >> 32)), y(uint32_t(mix64(h) >> 32)) {}
+  };
+  /// get_2d_keyed with the seeds of the key precomputed (the same values).
+  Vec2f get_2d_keyed(const PairSeeds& k) const {
+    uint32_t index = permute_index_masked(m_sample, m_spp, m_mask, k.permutation);
+    uint32_t x = reverse_bits32(laine_karras(index, k.x));
+    uint32_t y = reverse_bits32(laine_karras(sobol_dim1_reversed(index), k.y));
     return {bits_to_unit_float(x), bits_to_unit_float(y)};
   }
 

@@ -3,6 +3,8 @@
 // Each warp ships with a chi-square test in tests/cpp/test_sampling.cpp.
 #pragma once
 
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "core/math.h"
@@ -22,12 +24,18 @@ inline void sincos_2pi(float u, float* sin_out, float* cos_out) {
   float a2 = a * a;
   float sa = a * (1.f + a2 * (-1.f / 6 + a2 * (1.f / 120 + a2 * (-1.f / 5040 + a2 * (1.f / 362880)))));
   float ca = 1.f + a2 * (-0.5f + a2 * (1.f / 24 + a2 * (-1.f / 720 + a2 * (1.f / 40320 + a2 * (-1.f / 3628800)))));
-  switch (int(k) & 3) {
-    case 0: *sin_out = sa; *cos_out = ca; break;
-    case 1: *sin_out = ca; *cos_out = -sa; break;
-    case 2: *sin_out = -sa; *cos_out = -ca; break;
-    default: *sin_out = -ca; *cos_out = sa; break;
-  }
+  // NOTE: the quadrant is random, so a switch over it mispredicts about 3 times in 4; the
+  // rotation is done with selects and sign-bit flips instead (the same values).
+  const uint32_t q = uint32_t(int(k)) & 3u;
+  const bool swap = (q & 1u) != 0;
+  float s = swap ? ca : sa, c = swap ? sa : ca;
+  uint32_t sb, cb;
+  std::memcpy(&sb, &s, 4);
+  std::memcpy(&cb, &c, 4);
+  sb ^= (q & 2u) << 30;              // quadrants 2, 3: sin negated
+  cb ^= ((q + 1u) & 2u) << 30;       // quadrants 1, 2: cos negated
+  std::memcpy(sin_out, &sb, 4);
+  std::memcpy(cos_out, &cb, 4);
 }
 
 /// NOTE: concentric mapping of Shirley & Chiu, "A Low Distortion Map Between Disk and
@@ -126,7 +134,12 @@ class Distribution1D {
   size_t sample(float u, float* pmf_out = nullptr, float* u_remapped = nullptr) const;
 
  private:
+  void build_guide();
+
   std::vector<float> m_cdf;  // size N + 1
+  /// Guide table (Chen & Asau 1974): m_guide[j] is the largest i with m_cdf[i] <= j / G, for
+  /// j = 0 .. G (G = m_guide.size() - 1 = N); sample() searches only between two entries.
+  std::vector<uint32_t> m_guide;
   std::vector<float> m_pmf;
   double m_total = 0.0;
 };

@@ -410,7 +410,8 @@ void Accel::intersect_packet(const RayPacket& rays, HitPacket* hits, RayLayer la
   int n = 0;
   for (int i = 0; i < k_packet_size; ++i) {
     hits->found[i] = false;
-    if (rays.valid[i]) lanes[n++] = i;
+    lanes[n] = i;  // NOTE: branch-free compaction (lanes end in random order: no misprediction)
+    n += rays.valid[i] != 0;
   }
   if (n == 0) return;
   if (n <= 3) {
@@ -449,7 +450,8 @@ void Accel::occluded_packet(const RayPacket& rays, bool occluded[k_packet_size],
   int n = 0;
   for (int i = 0; i < k_packet_size; ++i) {
     occluded[i] = false;
-    if (rays.valid[i]) lanes[n++] = i;
+    lanes[n] = i;  // branch-free compaction, as in intersect_packet
+    n += rays.valid[i] != 0;
   }
   if (n == 0) return;
   if (n <= 3) {

@@ -128,15 +128,15 @@ inline bool survives_roulette(PathState& st, const PixelSampler& sampler, uint32
 /// only on (seed, pixel, bounce), so the lanes of a packet share them.
 struct VertexKeys {
   uint32_t bounce = ~0u;
-  uint64_t light = 0, bsdf = 0, pick_lobe = 0, dome_light = 0, dome_pick = 0;
+  PixelSampler::PairSeeds light, bsdf, pick_lobe, dome_light, dome_pick;
   void update(uint32_t b, const PixelSampler& sampler) {
     if (b == bounce) return;
     uint32_t base = 2 + b * k_dims_per_vertex;
-    light = sampler.pair_key(base);
-    bsdf = sampler.pair_key(base + 2);
-    pick_lobe = sampler.pair_key(base + 4);
-    dome_light = sampler.pair_key(base + 8);
-    dome_pick = sampler.pair_key(base + 10);
+    light = PixelSampler::PairSeeds(sampler.pair_key(base));
+    bsdf = PixelSampler::PairSeeds(sampler.pair_key(base + 2));
+    pick_lobe = PixelSampler::PairSeeds(sampler.pair_key(base + 4));
+    dome_light = PixelSampler::PairSeeds(sampler.pair_key(base + 8));
+    dome_pick = PixelSampler::PairSeeds(sampler.pair_key(base + 10));
     bounce = b;
   }
 };

@@ -277,11 +277,11 @@ class PathTracer {
     uint64_t pixel = uint64_t(y) * sc.camera.width + x;
     constexpr int W = k_packet_size;
     PixelSampler samplers[W];
-    uint64_t pixel_key[2] = {0, 0};  // per half of the samples (PixelSampler::half)
+    PixelSampler::PairSeeds pixel_key[2];  // per half of the samples (PixelSampler::half)
     for (uint32_t i = 0; i < uint32_t(W); ++i) {
       st[i] = PathState();
       samplers[i] = PixelSampler(m_s.seed, pixel, s0 + i, m_max_spp, m_block);
-      if (i < 2) pixel_key[samplers[i].half()] = samplers[i].pair_key(0);
+      if (i < 2) pixel_key[samplers[i].half()] = PixelSampler::PairSeeds(samplers[i].pair_key(0));
       if (i >= n || (lane_on && !lane_on[i])) {
         st[i].active = false;
         continue;
@@ -360,8 +360,10 @@ class PathTracer {
               if (blocked.valid[i] && !by_catchers[i]) st[i].touched = true;
           }
         }
+        // NOTE: a select, not a branch: whether a shadow ray is blocked is random, so the branch
+        // mispredicted often; adding zero leaves L as it was (radiance is never -0).
         for (int i = 0; i < W; ++i)
-          if (shadows.valid[i] && !occluded[i]) st[i].L += st[i].shadow_contrib[g];
+          st[i].L += (shadows.valid[i] && !occluded[i]) ? st[i].shadow_contrib[g] : Color(0.f);
       }
     }
   }

@@ -75,6 +75,12 @@ double perez(const PerezCoefficients& k, double cos_theta, double gamma) {
   double cg = std::cos(gamma);
   return (1.0 + k.a * std::exp(k.b / cos_theta)) * (1.0 + k.c * std::exp(k.d * gamma) + k.e * cg * cg);
 }
+/// perez() with 1 / cos(theta) and cos(gamma) given: the per-direction work the three
+/// channels share (SkyLight::sky_radiance_d).
+double perez(const PerezCoefficients& k, double inv_cos_theta, double gamma, double cos_gamma) {
+  return (1.0 + k.a * std::exp(k.b * inv_cos_theta)) *
+         (1.0 + k.c * std::exp(k.d * gamma) + k.e * cos_gamma * cos_gamma);
+}
 
 /// NOTE: zenith luminance in kcd/m^2, Preetham appendix A.2:
 /// Y_z = (4.0453 T - 4.9710) tan(chi) - 0.2155 T + 2.4192, chi = (4/9 - T/120)(pi - 2 theta_s).
@@ -347,9 +353,14 @@ class SkyLight final : public Light {
     // Angle to the sun from atan2(|d x s|, d . s): accurate also near the sun.
     const double* s = m_sun_dir_d;
     double cx = dy * s[2] - dz * s[1], cy = dz * s[0] - dx * s[2], cz = dx * s[1] - dy * s[0];
-    double gamma = std::atan2(std::sqrt(cx * cx + cy * cy + cz * cz), dx * s[0] + dy * s[1] + dz * s[2]);
+    // NOTE: cos(gamma) is the dot product over the hypotenuse (not the cosine of the angle),
+    // and the angle itself needs only float accuracy (exp(D gamma), |D| < 2): atan2f, as
+    // the double atan2 (the sky's largest cost in a profile of a daylight frame) costs more.
+    const double sin_g = std::sqrt(cx * cx + cy * cy + cz * cz), cos_g = dx * s[0] + dy * s[1] + dz * s[2];
+    const double gamma = double(std::atan2(float(sin_g), float(cos_g)));
+    const double cos_gamma = cos_g / std::sqrt(sin_g * sin_g + cos_g * cos_g), inv_cos_theta = 1.0 / dy;
     double v[3];
-    for (int k = 0; k < 3; ++k) v[k] = m_zenith_over_f0[k] * perez(m_coef[k], dy, gamma);
+    for (int k = 0; k < 3; ++k) v[k] = m_zenith_over_f0[k] * perez(m_coef[k], inv_cos_theta, gamma, cos_gamma);
     return xyY_to_linear_srgb(v[1], v[2], v[0] * m_scale);
   }
 

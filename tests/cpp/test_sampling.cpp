@@ -6,7 +6,9 @@
 // k_chi2_alpha in chi2.h (0.01 overall, Bonferroni-corrected over the suite).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "chi2.h"
@@ -285,6 +287,91 @@ TEST(sampling, distribution1d_edges) {
   EXPECT_EQ(z.sample(0.6f), 2u);
   EXPECT_THROW(Distribution1D({1.f, -1.f}), Error);
   EXPECT_THROW(Distribution1D({1.f, std::nanf("")}), Error);
+}
+
+// The guide table narrows the search (sampling.cpp): the index, pmf and remapped u must be
+// exactly those of a search over the whole table, for every kind of table and every u that
+// matters: at and next to each cdf value, each guide threshold j / N, 0 and just below 1.
+TEST(sampling, distribution1d_guide_equals_full_search) {
+  Pcg32 rng(11);
+  size_t checked = 0;
+  for (size_t n : {16u, 17u, 100u, 256u, 1000u, 4097u}) {
+    for (int kind = 0; kind < 5; ++kind) {
+      std::vector<float> w(n);
+      for (size_t i = 0; i < n; ++i) {
+        float r = rng.next_float();
+        switch (kind) {
+          case 0: w[i] = 1.f; break;                                          // uniform
+          case 1: w[i] = r * r * r * r; break;                                // skewed
+          case 2: w[i] = (i % 7 == 0) ? 0.f : r; break;                       // zero bins
+          case 3: w[i] = (i == n / 3) ? 1e7f : r * 1e-3f; break;              // one spike
+          default: w[i] = (i < n / 2 || i + 1 == n) ? 0.f : std::exp(20.f * r); break;  // zero half
+        }
+      }
+      Distribution1D d(w);
+      // The reference: the largest i with cdf[i] <= u over the whole table, then the same
+      // zero-bin skipping and remapping (recomputed here from the pmf's partial sums
+      // as the class stores them: cdf via the same double sums).
+      std::vector<double> cdf_d(n + 1, 0.0);
+      for (size_t i = 0; i < n; ++i) cdf_d[i + 1] = cdf_d[i] + w[i];
+      std::vector<float> cdf(n + 1);
+      for (size_t i = 0; i <= n; ++i) cdf[i] = float(cdf_d[i] / cdf_d[n]);
+      cdf[n] = 1.f;
+      std::vector<float> us = {0.f, k_one_minus_epsilon};
+      for (size_t i = 0; i <= n; ++i) {
+        for (float c : {cdf[i], float(i) / float(n)}) {
+          us.push_back(c);
+          us.push_back(std::nextafter(c, 0.f));
+          us.push_back(std::nextafter(c, 1.f));
+        }
+      }
+      for (int k = 0; k < 2000; ++k) us.push_back(rng.next_float());
+      for (float u : us) {
+        if (!(u >= 0.f && u < 1.f)) continue;
+        size_t i = size_t(std::max<ptrdiff_t>(0, (std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()) - 1));
+        i = std::min(i, n - 1);
+        while (d.pmf(i) == 0.f && i + 1 < n) ++i;
+        while (d.pmf(i) == 0.f && i > 0) --i;
+        float wd = cdf[i + 1] - cdf[i];
+        float r = std::min(std::max(wd > 0.f ? (u - cdf[i]) / wd : 0.f, 0.f), k_one_minus_epsilon);
+        float pmf = -1.f, ur = -1.f;
+        ASSERT_EQ(d.sample(u, &pmf, &ur), i) << "n " << n << " kind " << kind << " u " << u;
+        ASSERT_EQ(pmf, d.pmf(i));
+        ASSERT_EQ(ur, r) << "n " << n << " kind " << kind << " u " << u;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100000u);
+}
+
+// The quadrant rotation of sincos_2pi is branch-free (selects and sign flips): the same bits
+// as the switch it replaced, over a fine grid and every quadrant boundary's neighbours.
+TEST(sampling, sincos_2pi_rotation_is_the_quadrant_switch) {
+  auto reference = [](float u, float* s_out, float* c_out) {
+    float k = std::nearbyint(u * 4.f);
+    float a = (u - k * 0.25f) * (2.f * k_pi);
+    float a2 = a * a;
+    float sa = a * (1.f + a2 * (-1.f / 6 + a2 * (1.f / 120 + a2 * (-1.f / 5040 + a2 * (1.f / 362880)))));
+    float ca = 1.f + a2 * (-0.5f + a2 * (1.f / 24 + a2 * (-1.f / 720 + a2 * (1.f / 40320 + a2 * (-1.f / 3628800)))));
+    switch (int(k) & 3) {
+      case 0: *s_out = sa; *c_out = ca; break;
+      case 1: *s_out = ca; *c_out = -sa; break;
+      case 2: *s_out = -sa; *c_out = -ca; break;
+      default: *s_out = -ca; *c_out = sa; break;
+    }
+  };
+  std::vector<float> us;
+  for (uint32_t i = 0; i <= 1u << 18; ++i) us.push_back(float(i) * 0x1p-18f);
+  for (float q : {0.125f, 0.375f, 0.625f, 0.875f, 0.25f, 0.5f, 0.75f, 1.f})
+    for (float u = q, k = 0; k < 64; ++k, u = std::nextafter(u, 0.f)) us.push_back(u);
+  for (float u : us) {
+    float s, c, rs, rc;
+    sincos_2pi(u, &s, &c);
+    reference(u, &rs, &rc);
+    ASSERT_EQ(std::memcmp(&s, &rs, 4), 0) << u;
+    ASSERT_EQ(std::memcmp(&c, &rc, 4), 0) << u;
+  }
 }
 
 TEST(sampling, power_heuristic) {

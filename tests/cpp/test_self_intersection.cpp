@@ -13,6 +13,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -503,5 +505,27 @@ TEST(self_intersection, emitter_authored_far_from_object_origin_lights_the_same)
     EXPECT_GT(ref, 0.0);
     EXPECT_NEAR(far / ref, 1.0, 0.005) << "floor radiance under a lamp authored in world space: " << ref
                                        << "; authored " << offset << " units from its object origin: " << far;
+  }
+}
+
+// offset_ray_origin steps each coordinate with the branch-free next_float_away: the same
+// bits as next_float_up / next_float_down (and v itself for a zero offset), for zeros of both
+// signs, subnormals, normal values, the largest finite, infinities and NaN.
+TEST(self_intersection, next_float_away_is_next_float_up_and_down) {
+  std::vector<float> vs = {0.f, -0.f, 1e-45f, -1e-45f, 1e-38f, -1e-38f, 1.f, -1.f, 0.1f, -3e7f,
+                           std::numeric_limits<float>::max(), -std::numeric_limits<float>::max(),
+                           k_inf, -k_inf, std::numeric_limits<float>::quiet_NaN()};
+  Pcg32 rng(3);
+  for (int i = 0; i < 100000; ++i) {
+    uint32_t bits = rng.next_u32();
+    float v;
+    std::memcpy(&v, &bits, 4);
+    vs.push_back(v);
+  }
+  auto same = [](float a, float b) { return std::memcmp(&a, &b, 4) == 0; };
+  for (float v : vs) {
+    for (float dir : {1.f, 1e-30f, k_inf}) ASSERT_TRUE(same(next_float_away(v, dir), next_float_up(v))) << v;
+    for (float dir : {-1.f, -1e-30f, -k_inf}) ASSERT_TRUE(same(next_float_away(v, dir), next_float_down(v))) << v;
+    for (float dir : {0.f, -0.f}) ASSERT_TRUE(same(next_float_away(v, dir), v)) << v;
   }
 }
