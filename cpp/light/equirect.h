@@ -21,17 +21,21 @@
 namespace sg {
 
 /// Map-space direction of the image coordinates (u, v) in [0, 1]^2.
+/// NOTE: sin and cos of phi = 2 pi u and theta = pi v from sincos_2pi (2e-7 absolute, no libm call).
 inline Vec3f equirect_direction(const Vec2f& uv) {
-  float phi = 2.f * k_pi * uv.x, theta = k_pi * uv.y;
-  float sin_theta = std::sin(theta);
-  return {sin_theta * std::sin(phi), std::cos(theta), -sin_theta * std::cos(phi)};
+  float sin_phi, cos_phi, sin_theta, cos_theta;
+  sincos_2pi(uv.x, &sin_phi, &cos_phi);
+  sincos_2pi(0.5f * uv.y, &sin_theta, &cos_theta);
+  return {sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi};
 }
 
 /// Image coordinates (u, v) in [0, 1]^2 of a unit map-space direction.
+/// NOTE: theta from atan2(sin, cos) rather than acos(cos): the same angle for a unit d, accurate
+/// near the poles too, and both angles from fast_atan2 (no libm call).
 inline Vec2f equirect_uv(const Vec3f& d) {
-  float u = std::atan2(d.x, -d.z) * k_inv_two_pi;
+  float u = fast_atan2(d.x, -d.z) * k_inv_two_pi;
   if (u < 0.f) u += 1.f;
-  float v = std::acos(std::min(1.f, std::max(-1.f, d.y))) * k_inv_pi;
+  float v = fast_atan2(std::sqrt(d.x * d.x + d.z * d.z), d.y) * k_inv_pi;
   return {u, v};
 }
 

@@ -96,6 +96,29 @@ TEST(sampling, sincos_2pi_matches_double_precision) {
   EXPECT_EQ(c, -1.f);
 }
 
+TEST(sampling, fast_atan2_matches_double_precision) {
+  double max_err = 0.0;
+  auto check = [&](float y, float x) {
+    const double e = std::fabs(double(fast_atan2(y, x)) - std::atan2(double(y), double(x)));
+    max_err = std::max(max_err, e);
+  };
+  // Every octant, on circles of several radii (the reduction is scale-free), and the axes.
+  for (uint32_t i = 0; i < 1u << 18; ++i) {
+    const double a = 2.0 * 3.14159265358979323846 * (double(i) + 0.5) / double(1u << 18) - 3.14159265358979323846;
+    for (double r : {1e-30, 1e-3, 1.0, 7e5}) check(float(r * std::sin(a)), float(r * std::cos(a)));
+  }
+  for (float y : {0.f, -0.f, 1.f, -1.f, 1e-38f, 3e38f})
+    for (float x : {1.f, -1.f, 1e-38f, -1e-38f, 3e38f, -3e38f}) check(y, x);
+  EXPECT_LT(max_err, 3e-7);  // the polynomial's 1e-7 and the rounding of pi - r (ulp(pi) = 2.4e-7)
+  // Signs and quadrants as std::atan2: the negative x axis is +pi above it and -pi below.
+  EXPECT_FLOAT_EQ(fast_atan2(0.f, -1.f), k_pi);
+  EXPECT_FLOAT_EQ(fast_atan2(-0.f, -1.f), -k_pi);
+  EXPECT_FLOAT_EQ(fast_atan2(1.f, 0.f), 0.5f * k_pi);
+  EXPECT_FLOAT_EQ(fast_atan2(-1.f, 0.f), -0.5f * k_pi);
+  EXPECT_EQ(fast_atan2(0.f, 0.f), 0.f);
+  EXPECT_TRUE(std::isnan(fast_atan2(std::nanf(""), 1.f)));
+}
+
 TEST(sampling, cosine_hemisphere_chi2) {
   Grid2D g{32, 64, -1.0, 1.0, 0.0, 2.0 * k_pi_d};
   int bad;
