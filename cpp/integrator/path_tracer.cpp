@@ -208,7 +208,15 @@ class PathTracer {
       return 0;
     }
     keys.update(st.bounce, sampler);
+    // NOTE: the vertex's stratified pairs are drawn together, before any is used (each is a pure
+    // function of its key): their hash chains are independent, so the CPU overlaps them.
     const Vec2f u_pick_lobe = sampler.get_2d_keyed(keys.pick_lobe);  // light choice, BSDF lobe
+    const Vec2f u_light = sampler.get_2d_keyed(keys.light), u_bsdf = sampler.get_2d_keyed(keys.bsdf);
+    Vec2f u_dome_pick, u_dome_light;  // the second light group's (a dome's) pairs
+    if (!sc.group_lights[1].empty()) {
+      u_dome_pick = sampler.get_2d_keyed(keys.dome_pick);
+      u_dome_light = sampler.get_2d_keyed(keys.dome_light);
+    }
 
     // Next-event estimation: sample a light of each group, defer the shadow rays.
     // Only lobes that are not Dirac deltas can be evaluated towards a sampled light.
@@ -219,14 +227,14 @@ class PathTracer {
       for (int g = 0; g < RenderScene::k_light_groups; ++g) {
         st.prev_light_total[g] = 0.f;
         if (sc.group_lights[g].empty()) continue;
-        const float u_pick = g == 0 ? u_pick_lobe.x : sampler.get_2d_keyed(keys.dome_pick).x;
+        const float u_pick = g == 0 ? u_pick_lobe.x : u_dome_pick.x;
         float pick_pmf;
         size_t li = sc.pick_light(g, si.p, u_pick, &pick_pmf, &st.prev_light_total[g]);
         const Light* light = sc.lights[li];
         // Without the inserted objects their emitters are absent: the same choice adds nothing.
         if (layer == RayLayer::catchers && !sc.light_in_catcher_layer[li]) continue;
         LightSample ls;
-        if (!light->sample(ctx, sampler.get_2d_keyed(g == 0 ? keys.light : keys.dome_light), &ls)) continue;
+        if (!light->sample(ctx, g == 0 ? u_light : u_dome_light, &ls)) continue;
         float bsdf_pdf;
         Color f = mat->eval_pdf(si, wo, ls.wi, &bsdf_pdf);
         if (is_black(f)) continue;
@@ -243,7 +251,7 @@ class PathTracer {
 
     // BSDF sampling.
     BsdfSample bs;
-    if (!mat->sample(si, wo, u_pick_lobe.y, sampler.get_2d_keyed(keys.bsdf), &bs)) {
+    if (!mat->sample(si, wo, u_pick_lobe.y, u_bsdf, &bs)) {
       st.active = false;
       return shadow_requested;
     }
