@@ -141,6 +141,18 @@ struct VertexKeys {
   }
 };
 
+/// How many of the valid rays among the first `m` lanes of `rays` reach their t_max unblocked.
+/// NOTE: the probes of one shading point (ambient occlusion, edges) share their origin and are
+/// short, so they are traced as one packet (Embree's 8- or 16-wide kernels) rather than one
+/// call per ray: the same rays, a fraction of the traversal cost.
+inline int count_unoccluded(const RenderScene& sc, const RayPacket& rays, int m) {
+  bool occluded[k_packet_size];
+  sc.accel->occluded_packet(rays, occluded, RayLayer::all);
+  int open = 0;
+  for (int k = 0; k < m; ++k) open += rays.valid[k] && !occluded[k];
+  return open;
+}
+
 /// Ambient occlusion at a shading point: the fraction of `n` cosine-distributed rays of
 /// length `radius` over the hemisphere of the shading normal (on the side of `wo`) that hit
 /// nothing. Random numbers: unstratified dimensions `dim0`.. of the path's sampler.
@@ -150,15 +162,22 @@ inline float estimate_ao(const RenderScene& sc, const SurfaceInteraction& si, co
   Vec3f nrm = si.ns * side, ng = si.ng * side;
   Frame f(nrm);
   int open = 0;
-  for (int j = 0; j < n; ++j) {
-    Vec2f u(sampler.get_independent(dim0 + 2 * uint32_t(j)), sampler.get_independent(dim0 + 2 * uint32_t(j) + 1));
-    Vec3f d = f.to_world(square_to_cosine_hemisphere(u));
-    if (dot(d, ng) <= 0.f) continue;  // below the geometric surface: occluded by it
-    Ray r;
-    r.o = offset_ray_origin(si.p, si.p_error, ng, d);
-    r.d = d;
-    r.t_max = radius;
-    open += !sc.accel->occluded(r);
+  for (int j0 = 0; j0 < n; j0 += k_packet_size) {
+    const int m = std::min(n - j0, k_packet_size);
+    RayPacket rays;
+    for (int k = 0; k < k_packet_size; ++k) rays.valid[k] = 0;
+    for (int k = 0; k < m; ++k) {
+      const uint32_t j = uint32_t(j0 + k);
+      Vec2f u(sampler.get_independent(dim0 + 2 * j), sampler.get_independent(dim0 + 2 * j + 1));
+      Vec3f d = f.to_world(square_to_cosine_hemisphere(u));
+      if (dot(d, ng) <= 0.f) continue;  // below the geometric surface: occluded by it
+      Ray r;
+      r.o = offset_ray_origin(si.p, si.p_error, ng, d);
+      r.d = d;
+      r.t_max = radius;
+      rays.set(k, r);
+    }
+    open += count_unoccluded(sc, rays, m);
   }
   return float(open) / float(n);
 }
@@ -178,14 +197,19 @@ inline float estimate_edges(const RenderScene& sc, const SurfaceInteraction& si,
   Vec3f o = si.p + ng * (lift + 1e-4f * (1.f + std::fabs(si.p.x) + std::fabs(si.p.y) + std::fabs(si.p.z)));
   float u = sampler.get_independent(dim);
   int open = 0;
-  for (int j = 0; j < n; ++j) {
-    float phi = 6.2831853f * (float(j) + u) / float(n);
-    Vec3f d = f.to_world(Vec3f(c * std::cos(phi), c * std::sin(phi), -s));
-    Ray r;
-    r.o = o;
-    r.d = d;
-    r.t_max = radius;
-    open += !sc.accel->occluded(r);
+  for (int j0 = 0; j0 < n; j0 += k_packet_size) {
+    const int m = std::min(n - j0, k_packet_size);
+    RayPacket rays;
+    for (int k = 0; k < k_packet_size; ++k) rays.valid[k] = 0;
+    for (int k = 0; k < m; ++k) {
+      float phi = 6.2831853f * (float(j0 + k) + u) / float(n);
+      Ray r;
+      r.o = o;
+      r.d = f.to_world(Vec3f(c * std::cos(phi), c * std::sin(phi), -s));
+      r.t_max = radius;
+      rays.set(k, r);
+    }
+    open += count_unoccluded(sc, rays, m);
   }
   return float(open) / float(n);
 }

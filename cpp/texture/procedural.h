@@ -210,12 +210,12 @@ struct ProceduralShaping {
   }
 };
 
-/// Mean colour of a procedural texture, estimated once at creation from a fixed set of
-/// points (for light power estimates and albedo priors; never used for shading).
+/// Mean colour of a procedural texture, estimated once at creation from a fixed set of `n`
+/// points (for light power estimates and albedo priors; "strokes" also shades with it where the
+/// footprint spans a cell, and asks for more points).
 template <class F>
-Color estimate_average(const F& value_at) {
+Color estimate_average(const F& value_at, int n = 512) {
   Color sum(0.f);
-  const int n = 512;
   for (int i = 0; i < n; ++i) {
     // A 3D Halton-like lattice over a 16-unit cube (bases 2, 3, 5).
     auto radical = [](int i, int b) {

@@ -1,4 +1,4 @@
-"""Procedural textures ("noise", "cellular") in renders: footprint band-limiting, mappings.
+"""Procedural textures ("noise", "cellular", "strokes") in renders: footprint band-limiting, mappings.
 
 Band-limiting: a plane covered with fine world-space fBm (the kind of mask rust and dirt use)
 seen at a grazing angle, lit so that rgb = albedo exactly (sun at the zenith with irradiance
@@ -35,9 +35,11 @@ def scene(band_limit: bool, texture: dict) -> sg.Scene:
 RUST_MASK = {"type": "noise", "params": {"pattern": "fbm", "octaves": 6, "mapping": "world", "scale": 8.0,
                                          "ramp_positions": [0.0, 1.0], "ramp_colors": [0.1, 0.1, 0.1, 0.9, 0.9, 0.9]}}
 CRACKS = {"type": "cellular", "params": {"output": "edge", "mapping": "world", "scale": 6.0, "remap": [0.0, 0.15]}}
+# Scratches as the wear presets draw them: beyond a footprint of a cell the texture is its mean.
+SCRATCHES = {"type": "strokes", "params": {"mapping": "world", "scale": 8.0, "width": 0.08, "density": 4}}
 
 
-@pytest.mark.parametrize("texture", [RUST_MASK, CRACKS], ids=["fbm", "cellular"])
+@pytest.mark.parametrize("texture", [RUST_MASK, CRACKS, SCRATCHES], ids=["fbm", "cellular", "strokes"])
 def test_band_limited_procedural_texture_does_not_alias(texture):
     """Aliasing energy = the variance an image has beyond the reference's: detail finer than
     a pixel folds into spurious pixel-to-pixel variation. Measured per image row on the

@@ -112,3 +112,25 @@ def test_same_seed_same_strokes_and_bad_ranges_refused():
         s.add_texture("strokes", {"length": [0.5, 3.0]})
     with pytest.raises(Exception, match="radius"):
         s.add_texture("strokes", {"mode": "swirl", "radius": [0.5, 1.5]})
+
+
+def test_footprints_of_a_cell_or_more_give_the_patterns_mean():
+    """Band-limiting: a footprint of at least a cell returns the texture's mean (the pixel integral
+    of the pattern), the same everywhere; below half a cell the strokes are drawn; in between the
+    value blends from the one to the other."""
+    s = Scene()
+    rng = np.random.default_rng(5)
+    pts = (rng.random((20000, 3)) * [40.0, 40.0, 0.0]).astype(np.float32)  # 1600 cells of a plane z = 0
+    t = s.add_texture("strokes", {"mapping": "world", "density": 4, "width": 0.08, "seed": 2})
+    fine = s.texture_values(t, pts, world_footprint=0.0)[:, 0]
+    mean = float(fine.mean())
+    for fp in (1.0, 3.0, 50.0):
+        wide = s.texture_values(t, pts, world_footprint=fp)[:, 0]
+        assert np.ptp(wide) == 0.0, "one value everywhere"
+        assert abs(float(wide[0]) - mean) < 0.1 * mean + 1e-3, (fp, float(wide[0]), mean)
+    drawn = s.texture_values(t, pts, world_footprint=0.25)[:, 0]
+    assert np.ptp(drawn) > 0.1, "strokes are still drawn below half a cell"
+    mid = s.texture_values(t, pts, world_footprint=0.75)[:, 0]
+    assert np.ptp(mid) > 0.0 and np.ptp(mid) < np.ptp(drawn), "between: partly blended"
+    off = s.add_texture("strokes", {"mapping": "world", "density": 4, "width": 0.08, "seed": 2, "band_limit": False})
+    assert np.array_equal(s.texture_values(off, pts, world_footprint=3.0)[:, 0], fine), "band_limit false: unfiltered"
