@@ -313,8 +313,8 @@ class SkyLight final : public Light {
    public:
     explicit DomePart(const SkyLight& sky) : m_sky(sky) {}
     bool sample(const LightSampleContext&, const Vec2f& u, LightSample* out) const override {
-      Vec3f wi = normalize(m_sky.m_sampler.sample(u));
-      float pdf = m_sky.m_sampler.pdf(wi);
+      float pdf;
+      Vec3f wi = m_sky.m_sampler.sample_with_pdf(u, &pdf);
       if (!(pdf > 0.f)) return false;
       set_infinite_sample(out, wi, m_sky.sky_radiance(wi), pdf);
       return true;

@@ -253,8 +253,8 @@ class TwilightLight final : public Light {
   }
 
   bool sample(const LightSampleContext&, const Vec2f& u, LightSample* out) const override {
-    Vec3f wi = normalize(m_sampler.sample(u));
-    float pdf = m_sampler.pdf(wi);
+    float pdf;
+    Vec3f wi = m_sampler.sample_with_pdf(u, &pdf);
     if (!(pdf > 0.f)) return false;
     set_infinite_sample(out, wi, le(wi), pdf);
     return true;

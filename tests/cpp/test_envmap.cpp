@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -21,6 +22,7 @@
 #include "core/params.h"
 #include "core/rng.h"
 #include "io/image_io.h"
+#include "light/equirect.h"
 #include "light/light.h"
 
 using namespace sg;
@@ -407,4 +409,33 @@ TEST(envmap, parameter_errors) {
   nan_map.set("filename", write_map("nan", 4, 2, [](int x, int y) { return Color(x == 2 && y == 1 ? NAN : 1.f); }));
   EXPECT_NE(message(nan_map).find("nan.exr"), std::string::npos) << message(nan_map);
   EXPECT_NE(message(nan_map).find("non-finite"), std::string::npos) << message(nan_map);
+}
+
+// EquirectSampler::sample_with_pdf takes the sampled cell's density when the point is safely
+// inside it: direction and density must equal normalize(sample(u)) and pdf() of it bit for
+// bit, for every u -- random ones and ones whose points land next to cell edges and the poles.
+TEST(envmap, sample_with_pdf_equals_pdf_of_the_sampled_direction) {
+  for (int size : {8, 64, 256}) {
+    const int w = size, h = size / 2;
+    Pcg32 rng{uint64_t(size)};
+    std::vector<float> values(size_t(w) * h);
+    for (float& v : values) v = rng.next_float() < 0.2f ? 0.f : rng.next_float() * rng.next_float() * 10.f;
+    EquirectSampler sampler(values, w, h);
+    std::vector<Vec2f> us;
+    for (int i = 0; i < 400000; ++i) us.push_back(rng.next_2d());
+    for (int i = 0; i <= 4000; ++i) {  // fine steps: points at every cell's edges
+      const float t = float(i) / 4000.f;
+      us.push_back(Vec2f(std::min(t, k_one_minus_epsilon), rng.next_float()));
+      us.push_back(Vec2f(rng.next_float(), std::min(t, k_one_minus_epsilon)));
+    }
+    auto same = [](float a, float b) { return std::memcmp(&a, &b, 4) == 0; };
+    for (const Vec2f& u : us) {
+      float pdf = -1.f;
+      const Vec3f wi = sampler.sample_with_pdf(u, &pdf);
+      const Vec3f ref = normalize(sampler.sample(u));
+      ASSERT_TRUE(same(wi.x, ref.x) && same(wi.y, ref.y) && same(wi.z, ref.z)) << u.x << " " << u.y;
+      ASSERT_TRUE(same(pdf, sampler.pdf(wi))) << size << ": u " << u.x << " " << u.y << " pdf " << pdf << " vs "
+                                              << sampler.pdf(wi);
+    }
+  }
 }
