@@ -20,6 +20,7 @@ CPU hours of the run), both of the best configuration on this machine.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import resource
 import shutil
@@ -40,6 +41,29 @@ def cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
+def every_output_scenario(scenario: str, tmp: str) -> tuple:
+    """(path, spec) of `scenario` at 640x480 with every output kind, written into `tmp`."""
+    with open(scenario) as f:
+        spec = yaml.safe_load(f)
+    spec["resolution"] = [640, 480]
+    spec["outputs"] = list(outputs.kind_names())
+    path = os.path.join(tmp, "scenario.yaml")
+    with open(path, "w") as f:
+        yaml.safe_dump(spec, f, sort_keys=False)
+    return path, spec
+
+
+@contextlib.contextmanager
+def local_cluster(workers: int):
+    """A client of a Dask LocalCluster of `workers` processes, one task thread each, on this
+    machine: ``with local_cluster(2) as client: ...``."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--frames", type=int, default=8, help="frames per configuration (default 8)")
@@ -47,15 +71,9 @@ def main(argv=None) -> int:
     ap.add_argument("--scenario", default=os.path.join(REPO, "scenarios", "default.yaml"))
     ap.add_argument("--dask", type=int, default=2, help="Dask LocalCluster worker processes (0: no Dask run)")
     args = ap.parse_args(argv)
-    with open(args.scenario) as f:
-        spec = yaml.safe_load(f)
-    spec["resolution"] = [640, 480]
-    spec["outputs"] = list(outputs.kind_names())
     tmp = tempfile.mkdtemp(prefix="synthgen-throughput-")
     try:
-        path = os.path.join(tmp, "scenario.yaml")
-        with open(path, "w") as f:
-            yaml.safe_dump(spec, f, sort_keys=False)
+        path, spec = every_output_scenario(args.scenario, tmp)
         print(f"scenario: {os.path.relpath(args.scenario, REPO)} at 640x480, {spec['render']['spp']} spp, "
               f"max_depth {spec['render']['max_depth']}, outputs: {', '.join(outputs.kind_names())}; "
               f"{args.frames} frames per run; {os.cpu_count()} cores")
@@ -70,11 +88,8 @@ def main(argv=None) -> int:
             out = os.path.join(tmp, name.replace("=", ""))
             c0 = cpu_seconds()
             if kw is None:
-                from distributed import Client, LocalCluster
-
                 threads = max(1, (os.cpu_count() or 1) // args.dask)
-                with LocalCluster(n_workers=args.dask, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster, Client(cluster) as client:
+                with local_cluster(args.dask) as client:
                     s = runner.run(path, out, count=args.frames, scheduler=client, threads=threads, progress=False)
                 task_bytes = s["task_bytes"]
             else:

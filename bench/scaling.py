@@ -27,16 +27,9 @@ import time
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 sys.path.insert(0, os.path.join(REPO, "python"))
 
-import yaml  # noqa: E402
-
 import synthgen as sg  # noqa: E402
-from synthgen import outputs, run as runner  # noqa: E402
-
-
-def cpu_seconds() -> float:
-    """CPU time of this process and its reaped children (user + system)."""
-    t = os.times()
-    return t.user + t.system + t.children_user + t.children_system
+from synthgen import run as runner  # noqa: E402
+from dataset_throughput import cpu_seconds, every_output_scenario, local_cluster  # noqa: E402
 
 
 def thread_curve(render, cores: int, runs: int):
@@ -87,10 +80,7 @@ def scenario_frame_render(path: str):
 def run_config(path: str, out: str, frames: int, workers: int, threads: int, dask: bool):
     c0, t0 = cpu_seconds(), time.perf_counter()
     if dask:
-        from distributed import Client, LocalCluster
-
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                          dashboard_address=None) as cluster, Client(cluster) as client:
+        with local_cluster(workers) as client:
             s = runner.run(path, out, count=frames, scheduler=client, threads=threads, progress=False)
     else:
         s = runner.run(path, out, count=frames, workers=workers, threads=threads, progress=False)
@@ -102,10 +92,7 @@ def run_config(path: str, out: str, frames: int, workers: int, threads: int, das
 
 def dask_task_overhead(workers: int, tasks: int = 200) -> float:
     """Median seconds from submitting an empty task on a LocalCluster to its result."""
-    from distributed import Client, LocalCluster
-
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+    with local_cluster(workers) as client:
         client.submit(int, 0, pure=False).result()
         times = []
         for k in range(tasks):
@@ -124,13 +111,7 @@ def main(argv=None) -> int:
     cores = os.cpu_count() or 1
     tmp = tempfile.mkdtemp(prefix="synthgen-scaling-")
     try:
-        with open(args.scenario) as f:
-            spec = yaml.safe_load(f)
-        spec["resolution"] = [640, 480]
-        spec["outputs"] = list(outputs.kind_names())
-        path = os.path.join(tmp, "scenario.yaml")
-        with open(path, "w") as f:
-            yaml.safe_dump(spec, f, sort_keys=False)
+        path, spec = every_output_scenario(args.scenario, tmp)
         print(f"machine: {cores} cores; scenario {os.path.relpath(args.scenario, REPO)} at 640x480, "
               f"{spec['render']['spp']} spp, every output")
 

@@ -8,30 +8,12 @@
 
 namespace sg {
 
-inline float next_float_up(float v) {
-  if (std::isinf(v) && v > 0.f) return v;
-  if (v == -0.f) v = 0.f;
-  uint32_t ui;
-  std::memcpy(&ui, &v, 4);
-  ui = v >= 0 ? ui + 1 : ui - 1;
-  std::memcpy(&v, &ui, 4);
-  return v;
-}
-inline float next_float_down(float v) {
-  if (std::isinf(v) && v < 0.f) return v;
-  if (v == 0.f) v = -0.f;
-  uint32_t ui;
-  std::memcpy(&ui, &v, 4);
-  ui = v > 0 ? ui - 1 : ui + 1;
-  std::memcpy(&v, &ui, 4);
-  return v;
-}
-
-/// next_float_up(v) when `dir` > 0, next_float_down(v) when `dir` < 0, else v; the same values
-/// for every v (infinities and NaN included), without branches.
-/// NOTE: the sign of an offset component depends on the surface and the new direction, so the
-/// branches of the two functions mispredicted often (a profile of the Cornell box); here they are
-/// selects (both steps computed, one kept), which the compiler turns into conditional moves.
+/// The next float above v when `dir` > 0, below it when `dir` < 0 (pbrt-v4 NextFloatUp /
+/// NextFloatDown: a zero steps to the smallest subnormal of that sign, an infinity of that sign
+/// stays), else v; without branches.
+/// NOTE: the sign of an offset component depends on the surface and the new direction, so pbrt's
+/// two branching functions (this file's before) mispredicted often (a profile of the Cornell
+/// box); here they are selects (both steps computed, one kept): conditional moves.
 inline float next_float_away(float v, float dir) {
   uint32_t ui;
   std::memcpy(&ui, &v, 4);

@@ -124,8 +124,8 @@ inline bool survives_roulette(PathState& st, const PixelSampler& sampler, uint32
   return true;
 }
 
-/// Pair keys (PixelSampler::pair_key) of one path vertex's sample dimensions. They depend
-/// only on (seed, pixel, bounce), so the lanes of a packet share them.
+/// The pair seeds (PixelSampler::PairSeeds of pair_key) of one path vertex's sample dimensions.
+/// They depend only on (seed, pixel, bounce), so the lanes of a packet share them.
 struct VertexKeys {
   uint32_t bounce = ~0u;
   PixelSampler::PairSeeds light, bsdf, pick_lobe, dome_light, dome_pick;
@@ -141,15 +141,26 @@ struct VertexKeys {
   }
 };
 
-/// How many of the valid rays among the first `m` lanes of `rays` reach their t_max unblocked.
+/// How many of the `n` probe rays of a shading point reach their t_max unblocked; `probe(j, &ray)`
+/// makes ray j and returns false for one that counts as blocked without tracing.
 /// NOTE: the probes of one shading point (ambient occlusion, edges) share their origin and are
-/// short, so they are traced as one packet (Embree's 8- or 16-wide kernels) rather than one
-/// call per ray: the same rays, a fraction of the traversal cost.
-inline int count_unoccluded(const RenderScene& sc, const RayPacket& rays, int m) {
-  bool occluded[k_packet_size];
-  sc.accel->occluded_packet(rays, occluded, RayLayer::all);
+/// short, so they are traced as packets of k_packet_size (Embree's 8- or 16-wide kernels) rather
+/// than one call per ray: the same rays, a fraction of the traversal cost.
+template <class Probe>
+int count_open_probes(const RenderScene& sc, int n, const Probe& probe) {
   int open = 0;
-  for (int k = 0; k < m; ++k) open += rays.valid[k] && !occluded[k];
+  for (int j0 = 0; j0 < n; j0 += k_packet_size) {
+    const int m = std::min(n - j0, k_packet_size);
+    RayPacket rays;
+    for (int k = 0; k < k_packet_size; ++k) {
+      rays.valid[k] = 0;
+      Ray r;
+      if (k < m && probe(j0 + k, &r)) rays.set(k, r);
+    }
+    bool occluded[k_packet_size];
+    sc.accel->occluded_packet(rays, occluded, RayLayer::all);
+    for (int k = 0; k < m; ++k) open += rays.valid[k] && !occluded[k];
+  }
   return open;
 }
 
@@ -161,24 +172,16 @@ inline float estimate_ao(const RenderScene& sc, const SurfaceInteraction& si, co
   float side = dot(si.ng, wo) >= 0.f ? 1.f : -1.f;
   Vec3f nrm = si.ns * side, ng = si.ng * side;
   Frame f(nrm);
-  int open = 0;
-  for (int j0 = 0; j0 < n; j0 += k_packet_size) {
-    const int m = std::min(n - j0, k_packet_size);
-    RayPacket rays;
-    for (int k = 0; k < k_packet_size; ++k) rays.valid[k] = 0;
-    for (int k = 0; k < m; ++k) {
-      const uint32_t j = uint32_t(j0 + k);
-      Vec2f u(sampler.get_independent(dim0 + 2 * j), sampler.get_independent(dim0 + 2 * j + 1));
-      Vec3f d = f.to_world(square_to_cosine_hemisphere(u));
-      if (dot(d, ng) <= 0.f) continue;  // below the geometric surface: occluded by it
-      Ray r;
-      r.o = offset_ray_origin(si.p, si.p_error, ng, d);
-      r.d = d;
-      r.t_max = radius;
-      rays.set(k, r);
-    }
-    open += count_unoccluded(sc, rays, m);
-  }
+  const int open = count_open_probes(sc, n, [&](int j, Ray* r) {
+    const uint32_t d0 = dim0 + 2 * uint32_t(j);
+    const Vec3f d = f.to_world(square_to_cosine_hemisphere(Vec2f(sampler.get_independent(d0),
+                                                                 sampler.get_independent(d0 + 1))));
+    if (dot(d, ng) <= 0.f) return false;  // below the geometric surface: occluded by it
+    r->o = offset_ray_origin(si.p, si.p_error, ng, d);
+    r->d = d;
+    r->t_max = radius;
+    return true;
+  });
   return float(open) / float(n);
 }
 
@@ -196,21 +199,13 @@ inline float estimate_edges(const RenderScene& sc, const SurfaceInteraction& si,
   const float lift = 0.1f * radius, c = 0.96592583f, s = 0.25881905f;  // cos, sin 15 degrees
   Vec3f o = si.p + ng * (lift + 1e-4f * (1.f + std::fabs(si.p.x) + std::fabs(si.p.y) + std::fabs(si.p.z)));
   float u = sampler.get_independent(dim);
-  int open = 0;
-  for (int j0 = 0; j0 < n; j0 += k_packet_size) {
-    const int m = std::min(n - j0, k_packet_size);
-    RayPacket rays;
-    for (int k = 0; k < k_packet_size; ++k) rays.valid[k] = 0;
-    for (int k = 0; k < m; ++k) {
-      float phi = 6.2831853f * (float(j0 + k) + u) / float(n);
-      Ray r;
-      r.o = o;
-      r.d = f.to_world(Vec3f(c * std::cos(phi), c * std::sin(phi), -s));
-      r.t_max = radius;
-      rays.set(k, r);
-    }
-    open += count_unoccluded(sc, rays, m);
-  }
+  const int open = count_open_probes(sc, n, [&](int j, Ray* r) {
+    const float phi = 6.2831853f * (float(j) + u) / float(n);
+    r->o = o;
+    r->d = f.to_world(Vec3f(c * std::cos(phi), c * std::sin(phi), -s));
+    r->t_max = radius;
+    return true;
+  });
   return float(open) / float(n);
 }
 

@@ -13,23 +13,14 @@
 #include <vector>
 
 #include "api/scene.h"
+#include "mesh_checks.h"
 #include "core/error.h"
 #include "core/params.h"
 
 using namespace sg;
+using sgtest::box;
 
 namespace {
-
-TriangleMesh box(const Vec3f& lo, const Vec3f& hi) {
-  TriangleMesh m;
-  m.name = "box";
-  for (int i = 0; i < 8; ++i)
-    m.positions.push_back(Vec3f((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z));
-  const uint32_t f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                             {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (auto& t : f) m.indices.insert(m.indices.end(), {t[0], t[1], t[2]});
-  return m;
-}
 
 TriangleMesh quad(float half, float z) {
   TriangleMesh m;

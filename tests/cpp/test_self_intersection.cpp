@@ -508,6 +508,28 @@ TEST(self_intersection, emitter_authored_far_from_object_origin_lights_the_same)
   }
 }
 
+namespace {
+// pbrt-v4's NextFloatUp / NextFloatDown with branches, as offset_ray_origin used them.
+inline float next_float_up(float v) {
+  if (std::isinf(v) && v > 0.f) return v;
+  if (v == -0.f) v = 0.f;
+  uint32_t ui;
+  std::memcpy(&ui, &v, 4);
+  ui = v >= 0 ? ui + 1 : ui - 1;
+  std::memcpy(&v, &ui, 4);
+  return v;
+}
+inline float next_float_down(float v) {
+  if (std::isinf(v) && v < 0.f) return v;
+  if (v == 0.f) v = -0.f;
+  uint32_t ui;
+  std::memcpy(&ui, &v, 4);
+  ui = v > 0 ? ui - 1 : ui + 1;
+  std::memcpy(&v, &ui, 4);
+  return v;
+}
+}  // namespace
+
 // offset_ray_origin steps each coordinate with the branch-free next_float_away: the same
 // bits as next_float_up / next_float_down (and v itself for a zero offset), for zeros of both
 // signs, subnormals, normal values, the largest finite, infinities and NaN.

@@ -63,6 +63,12 @@ def _died(frame: int, exitcode: Optional[int], journal: str = "") -> Dict[str, A
             "traceback": "", **({"journal": journal} if journal else {})}
 
 
+def _share_cores(workers: int) -> int:
+    """Render threads for each of `workers` processes on this machine: its cores shared among
+    them; 0 (all cores) for a worker alone here (or none)."""
+    return max(1, (os.cpu_count() or 1) // workers) if workers > 1 else 0
+
+
 class LocalExecutor:
     """Frames on a pool of worker processes on this machine (``workers`` = 1: in this
     process). Workers keep their scene across frames and are replaced after ``recycle``
@@ -81,7 +87,7 @@ class LocalExecutor:
     def default_threads(self) -> int:
         """Render threads per worker when none are asked: this machine's cores shared by the
         workers (0, all cores, for one worker)."""
-        return max(1, (os.cpu_count() or 1) // self.workers) if self.workers > 1 else 0
+        return _share_cores(self.workers)
 
     def _new_pool(self, workers: int, shared: tuple) -> Any:
         import multiprocessing as mp
@@ -215,8 +221,7 @@ class DaskExecutor:
             local.add(socket.gethostbyname(socket.gethostname()))
         except OSError:
             pass
-        here = sum(1 for w in workers if w.get("host") in local)
-        return max(1, (os.cpu_count() or 1) // here) if here > 1 else 0
+        return _share_cores(sum(1 for w in workers if w.get("host") in local))
 
     def map(self, fn: Callable, shared: tuple, frames: Sequence[int], options: Optional[Dict[str, Any]] = None,
             alone_options: Optional[Dict[str, Any]] = None,
