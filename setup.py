@@ -38,7 +38,9 @@ class CMakeBuild(build_ext):
         ]
         subprocess.run(cfg, check=True)
         jobs = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL", str(os.cpu_count() or 2))
-        subprocess.run(["cmake", "--build", str(build_dir), "--target", "_core", "--target", "synthgen_image_io", "--target", "synthgen_reader", "-j", jobs], check=True)
+        targets = ["_core", "synthgen_image_io", "synthgen_vdb", "synthgen_reader"]
+        subprocess.run(["cmake", "--build", str(build_dir), *[a for t in targets for a in ("--target", t)], "-j", jobs],
+                       check=True)
 
 
 setup(

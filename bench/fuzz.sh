@@ -29,6 +29,7 @@ if [ ! -f "$BUILD/CMakeCache.txt" ]; then
 fi
 cmake --build "$BUILD" -j "$JOBS" >> "$BUILD.log" 2>&1 || { tail -30 "$BUILD.log"; echo "fuzz_crashes=-1"; exit 1; }
 export SYNTHGEN_IMAGE_IO_PLUGIN="$PWD/$BUILD/libsynthgen_oiio.so"
+export SYNTHGEN_VDB_PLUGIN="$PWD/$BUILD/libsynthgen_vdb.so"
 export SYNTHGEN_READER="$PWD/$BUILD/synthgen-reader"   # the instrumented reader (fuzz_mesh_import)
 # Leaks inside Debian's uninstrumented libraries are not ours; UBSan stops at the first report.
 # A sanitizer report exits with status 86 (how fuzz_mesh_import recognizes one from
@@ -104,7 +105,7 @@ if selected fuzz_yaml; then
   if [ -x .venv/bin/python ]; then
     # The package's own reader and image plugin: the instrumented ones are for the C++ targets
     # (an ASan reader cannot start under the address-space limit fuzz_yaml.py sets).
-    env -u SYNTHGEN_READER -u SYNTHGEN_IMAGE_IO_PLUGIN .venv/bin/python fuzz/fuzz_yaml.py --seconds "$SECONDS_PER_TARGET" --corpus "$BUILD/corpus/$name" \
+    env -u SYNTHGEN_READER -u SYNTHGEN_IMAGE_IO_PLUGIN -u SYNTHGEN_VDB_PLUGIN .venv/bin/python fuzz/fuzz_yaml.py --seconds "$SECONDS_PER_TARGET" --corpus "$BUILD/corpus/$name" \
       --crashes "$crashes_dir" > "$log" 2>&1
   else
     echo "fuzz_yaml: .venv is missing (make install)" > "$log"

@@ -1,6 +1,4 @@
 // Loads the OpenImageIO plugin (libsynthgen_oiio.so) on first use; see image_io.h.
-#include <dlfcn.h>
-
 #include <cmath>
 #include <filesystem>
 #include <mutex>
@@ -8,6 +6,7 @@
 #include "core/error.h"
 #include "core/isolate.h"
 #include "io/image_io.h"
+#include "io/plugin_loader.h"
 
 namespace sg {
 
@@ -17,31 +16,10 @@ const ImageIoApi* g_api = nullptr;
 std::string g_load_error;
 
 void load_plugin() {
-  std::vector<std::string> candidates;
-  if (const char* env = std::getenv("SYNTHGEN_IMAGE_IO_PLUGIN")) candidates.push_back(env);
-  Dl_info info;
-  if (dladdr(reinterpret_cast<void*>(&load_plugin), &info) && info.dli_fname) {
-    std::filesystem::path here = std::filesystem::path(info.dli_fname).parent_path();
-    candidates.push_back((here / "libsynthgen_oiio.so").string());
-  }
-  candidates.push_back("libsynthgen_oiio.so");  // LD_LIBRARY_PATH / system
   std::string errors;
-  for (const auto& c : candidates) {
-    void* handle = dlopen(c.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (!handle) {
-      const char* e = dlerror();
-      errors += "\n  " + c + ": " + (e ? e : "unknown error");
-      continue;
-    }
-    auto fn = reinterpret_cast<const ImageIoApi* (*)()>(dlsym(handle, "synthgen_image_io_api"));
-    const ImageIoApi* api = fn ? fn() : nullptr;
-    if (api && api->version == k_image_io_api_version) {
-      g_api = api;
-      return;
-    }
-    errors += "\n  " + c + ": not a compatible synthgen image plugin";
-  }
-  g_load_error = "cannot load the OpenImageIO plugin libsynthgen_oiio.so:" + errors;
+  g_api = load_plugin_api<ImageIoApi>("libsynthgen_oiio.so", "SYNTHGEN_IMAGE_IO_PLUGIN", "synthgen_image_io_api",
+                                      k_image_io_api_version, "image", &errors);
+  if (!g_api) g_load_error = "cannot load the OpenImageIO plugin libsynthgen_oiio.so:" + errors;
 }
 
 const ImageIoApi& api() {

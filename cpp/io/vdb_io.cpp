@@ -1,3 +1,4 @@
+// The OpenVDB plugin, libsynthgen_vdb.so (see vdb_io.h): reads and writes .vdb float grids.
 #include "io/vdb_io.h"
 
 #include <cmath>
@@ -12,11 +13,13 @@
 
 namespace sg {
 
+namespace {
+
 #ifdef SYNTHGEN_HAVE_OPENVDB
 
-bool vdb_supported() { return true; }
+constexpr bool k_supported = true;
 
-DenseGrid read_vdb_grid(const std::string& path, const std::string& grid_name) {
+DenseGrid read_grid(const std::string& path, const std::string& grid_name) {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
   const std::string ctx = "vdb file '" + path + "'";
@@ -76,7 +79,7 @@ DenseGrid read_vdb_grid(const std::string& path, const std::string& grid_name) {
   return out;
 }
 
-void write_vdb_grid(const std::string& path, const std::string& grid_name, const DenseGrid& g) {
+void write_grid(const std::string& path, const std::string& grid_name, const DenseGrid& g) {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
   auto grid = openvdb::FloatGrid::create(0.f);
@@ -102,17 +105,49 @@ void write_vdb_grid(const std::string& path, const std::string& grid_name, const
 
 #else
 
-bool vdb_supported() { return false; }
+constexpr bool k_supported = false;
 
-void write_vdb_grid(const std::string& path, const std::string&, const DenseGrid&) {
+void write_grid(const std::string& path, const std::string&, const DenseGrid&) {
   throw Error("vdb file '" + path + "': synthgen was built without OpenVDB (install libopenvdb-dev and rebuild)");
 }
 
-DenseGrid read_vdb_grid(const std::string& path, const std::string&) {
+DenseGrid read_grid(const std::string& path, const std::string&) {
   throw Error("vdb file '" + path + "': synthgen was built without OpenVDB (install libopenvdb-dev and rebuild), "
               "so .vdb files cannot be read; a raw float32 grid can");
 }
 
 #endif
 
+// NOTE: no exception crosses the plugin boundary (the core and this library each have their own
+// copy of sg::Error's type information): errors travel as strings, the core throws them again.
+bool api_read(const char* path, const char* grid_name, DenseGrid* out, std::string* error) {
+  try {
+    *out = read_grid(path, grid_name);
+    return true;
+  } catch (const std::exception& e) {
+    *error = e.what();
+  } catch (...) {
+    *error = std::string("vdb file '") + path + "': unknown error";
+  }
+  return false;
+}
+
+bool api_write(const char* path, const char* grid_name, const DenseGrid* grid, std::string* error) {
+  try {
+    write_grid(path, grid_name, *grid);
+    return true;
+  } catch (const std::exception& e) {
+    *error = e.what();
+  } catch (...) {
+    *error = std::string("vdb file '") + path + "': unknown error";
+  }
+  return false;
+}
+
+const VdbIoApi k_api{k_vdb_io_api_version, k_supported, api_read, api_write};
+
+}  // namespace
+
 }  // namespace sg
+
+extern "C" __attribute__((visibility("default"))) const sg::VdbIoApi* synthgen_vdb_io_api() { return &sg::k_api; }

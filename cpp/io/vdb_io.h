@@ -1,6 +1,8 @@
 // OpenVDB files (.vdb): a float grid read into a dense array, for the 'grid' medium. OpenVDB's API
-// is used in vdb_io.cpp alone, built as the shared library libsynthgen_vdb.so (see CMakeLists.txt for
-// why); without OpenVDB at build time (CMake found no libopenvdb-dev) these are errors saying so.
+// is used in vdb_io.cpp alone, built as the plugin libsynthgen_vdb.so (see CMakeLists.txt for why)
+// that vdb_io_loader.cpp opens on first use (OpenVDB's libraries take ~40 ms to load, a quarter
+// of `import synthgen`); without OpenVDB at build time (CMake found no libopenvdb-dev) these are
+// errors saying so.
 #pragma once
 
 #include <string>
@@ -18,7 +20,7 @@ struct DenseGrid {
   std::vector<float> values;
 };
 
-/// True when this build can read .vdb files.
+/// True when this build can read .vdb files (opens the plugin).
 bool vdb_supported();
 /// Reads the float grid `grid_name` of the .vdb file `path`: its active voxels' bounding box as a
 /// dense grid (inactive voxels there take the background value), placed in the world by the
@@ -32,4 +34,15 @@ DenseGrid read_vdb_grid(const std::string& path, const std::string& grid_name);
 /// of size (hi - lo) / n). For tests and tools. Throws sg::Error naming the file.
 void write_vdb_grid(const std::string& path, const std::string& grid_name, const DenseGrid& grid);
 
+/// The plugin's entry points (synthgen_vdb_io_api()): false and a message on failure.
+struct VdbIoApi {
+  int version;
+  bool supported;
+  bool (*read)(const char* path, const char* grid_name, DenseGrid* out, std::string* error);
+  bool (*write)(const char* path, const char* grid_name, const DenseGrid* grid, std::string* error);
+};
+constexpr int k_vdb_io_api_version = 1;
+
 }  // namespace sg
+
+extern "C" const sg::VdbIoApi* synthgen_vdb_io_api();

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -19,6 +20,10 @@ using namespace sg;
 using namespace sgtest;
 
 namespace {
+
+// The OpenVDB plugin is built next to the Python module, not next to this test: point the loader
+// (io/vdb_io_loader.cpp) at it before any test runs, unless the caller already did.
+const bool g_vdb_plugin_env = [] { return setenv("SYNTHGEN_VDB_PLUGIN", SYNTHGEN_VDB_PLUGIN_PATH, 0) == 0; }();
 
 std::string temp_path(const std::string& name) {
   auto dir = std::filesystem::temp_directory_path() / ("sg_test_grid_" + std::to_string(::getpid()));

@@ -3,6 +3,9 @@ medium keeps the furnace, light sampling with MIS and without agree, renders are
 1 and 2 threads and after an XML save / load, the scene file's ``medium`` key (a raw grid file
 relative to the scene file), deterministic camera transmittance for labels, and errors naming the
 file or key."""
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -135,3 +138,17 @@ def test_bad_heterogeneous_parameters_are_errors(tmp_path):
     with pytest.raises(sg.SynthgenError, match="finite"):
         s.set_medium("grid", {"data": [0.0, float("nan")], "resolution": [2, 1, 1], "bounds_min": [0, 0, 0],
                               "bounds_max": [1, 1, 1], "visibility": 1.0})
+
+
+def test_openvdb_loads_on_first_use(tmp_path):
+    """OpenVDB's libraries (~40 ms) stay out of `import synthgen` until a .vdb file is read or written."""
+    script = (
+        "import numpy as np, synthgen as sg\n"
+        "def vdb_mapped():\n"
+        "    return any('libopenvdb' in line for line in open('/proc/self/maps'))\n"
+        "before = vdb_mapped()\n"
+        f"path = {str(tmp_path / 'g.vdb')!r}\n"
+        "sg._core.write_vdb_grid(path, 'density', np.ones((2, 2, 2), np.float32), [0, 0, 0], [1, 1, 1])\n"
+        "print(before, vdb_mapped())\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "True"]
