@@ -112,18 +112,23 @@ class EquirectSampler {
     const float du = std::min(fu - std::floor(fu), std::floor(fu) + 1.f - fu) / float(m_width);
     const float dv = std::min(fv - std::floor(fv), std::floor(fv) + 1.f - fv) / float(m_height);
     if (sin_theta > 0.f && dv > 1e-5f && du * sin_theta > 2e-5f)
-      *pdf_out = cell_pdf / (2.f * k_pi * k_pi * sin_theta);
+      *pdf_out = solid_angle_density(cell_pdf, wi);
     else
       *pdf_out = pdf(wi);
     return wi;
   }
 
   /// Solid-angle density of sample() at the unit map-space direction d.
-  /// NOTE: p(omega) = p(u, v) / (2 pi^2 sin theta), pbrt-v3 eq. 14.8.
-  float pdf(const Vec3f& d) const {
-    float sin_theta = std::sqrt(d.x * d.x + d.z * d.z);
+  float pdf(const Vec3f& d) const { return solid_angle_density(m_dist.pdf(equirect_uv(d)), d); }
+
+  /// The solid-angle density at the unit direction d of the (u, v) density `cell_pdf`.
+  /// NOTE: p(omega) = p(u, v) / (2 pi^2 sin theta), pbrt-v3 eq. 14.8. Out of line: with FMA
+  /// contraction (GCC's default -ffp-contract=fast) sin theta inlined into two callers may round
+  /// differently, and sample_with_pdf() must agree with pdf() bit for bit.
+  [[gnu::noinline]] static float solid_angle_density(float cell_pdf, const Vec3f& d) {
+    const float sin_theta = std::sqrt(d.x * d.x + d.z * d.z);
     if (!(sin_theta > 0.f)) return 0.f;
-    return m_dist.pdf(equirect_uv(d)) / (2.f * k_pi * k_pi * sin_theta);
+    return cell_pdf / (2.f * k_pi * k_pi * sin_theta);
   }
 
  private:

@@ -52,6 +52,11 @@ constexpr double k_lm_per_w = 683.0;
 struct PerezCoefficients {
   double a, b, c, d, e;
 };
+struct PerezCoefficientsF {
+  float a, b, c, d, e;
+  explicit PerezCoefficientsF(const PerezCoefficients& k = {0, 0, 0, 0, 0})
+      : a(float(k.a)), b(float(k.b)), c(float(k.c)), d(float(k.d)), e(float(k.e)) {}
+};
 
 // NOTE: distribution coefficients for luminance Y and chromaticities x, y, linear in the
 // turbidity T: Preetham appendix A.2.
@@ -75,13 +80,11 @@ double perez(const PerezCoefficients& k, double cos_theta, double gamma) {
   double cg = std::cos(gamma);
   return (1.0 + k.a * std::exp(k.b / cos_theta)) * (1.0 + k.c * std::exp(k.d * gamma) + k.e * cg * cg);
 }
-/// perez() with 1 / cos(theta) and cos(gamma) given: the per-direction work the three
-/// channels share (SkyLight::sky_radiance_d).
-/// NOTE: the two exponentials in float (glibc's expf took 2.26 ns a call in a loop, exp 4.00 ns;
-/// the factors they scale are within float's precision of their double values).
-double perez(const PerezCoefficients& k, double inv_cos_theta, double gamma, double cos_gamma) {
-  return (1.0 + k.a * double(std::exp(float(k.b * inv_cos_theta)))) *
-         (1.0 + k.c * double(std::exp(float(k.d * gamma))) + k.e * cos_gamma * cos_gamma);
+/// perez() in float with 1 / cos(theta) and cos(gamma) given: the per-direction work the three
+/// channels share (SkyLight::sky_radiance).
+float perez(const PerezCoefficientsF& k, float inv_cos_theta, float gamma, float cos_gamma) {
+  return (1.f + k.a * std::exp(k.b * inv_cos_theta)) *
+         (1.f + k.c * std::exp(k.d * gamma) + k.e * cos_gamma * cos_gamma);
 }
 
 /// NOTE: zenith luminance in kcd/m^2, Preetham appendix A.2:
@@ -209,15 +212,17 @@ class SkyLight final : public Light {
     m_sun_dir_d[1] = std::sin(el);
     m_sun_dir_d[2] = -std::cos(el) * std::cos(az);
     double theta_s = k_pi_d / 2.0 - el;
-    m_coef[0] = perez_Y(turbidity);
-    m_coef[1] = perez_x(turbidity);
-    m_coef[2] = perez_y(turbidity);
+    const PerezCoefficients coef[3] = {perez_Y(turbidity), perez_x(turbidity), perez_y(turbidity)};
     // Zenith values Y_z (kcd/m^2), x_z, y_z; the sky is zenith value x F(theta, gamma) / F(0, theta_s).
     double zenith[3] = {zenith_luminance(turbidity, theta_s), zenith_chromaticity(k_zenith_x, turbidity, theta_s),
                         zenith_chromaticity(k_zenith_y, turbidity, theta_s)};
-    for (int k = 0; k < 3; ++k) m_zenith_over_f0[k] = zenith[k] / perez(m_coef[k], 1.0, theta_s);
+    for (int k = 0; k < 3; ++k) {
+      m_coef[k] = PerezCoefficientsF(coef[k]);
+      m_zenith_over_f0[k] = float(zenith[k] / perez(coef[k], 1.0, theta_s));
+    }
+    m_sun_dir = Vec3f(float(m_sun_dir_d[0]), float(m_sun_dir_d[1]), float(m_sun_dir_d[2]));
     // kcd/m^2 -> cd/m^2 -> W/(m^2 sr) (luminance / 683).
-    m_scale = double(strength) * 1000.0 / k_lm_per_w;
+    m_scale = float(double(strength) * 1000.0 / k_lm_per_w);
 
     // The sun disc, through the "sun" plugin: irradiance = radiance x pi sin^2(half-angle).
     Color sun_irradiance(0.f);
@@ -240,7 +245,7 @@ class SkyLight final : public Light {
       double cos_t = (i + 0.5) / nz, sin_t = std::sqrt(1.0 - cos_t * cos_t);
       for (int j = 0; j < nphi; ++j) {
         double phi = 2.0 * k_pi_d * (j + 0.5) / nphi;
-        Color l = sky_radiance_d(sin_t * std::sin(phi), cos_t, -sin_t * std::cos(phi));
+        Color l = sky_radiance(Vec3f(float(sin_t * std::sin(phi)), float(cos_t), float(-sin_t * std::cos(phi))));
         for (int k = 0; k < 3; ++k) e_h[k] += double(l[k]) * cos_t;
       }
     }
@@ -347,29 +352,36 @@ class SkyLight final : public Light {
   };
 
   /// Sky (above the horizon) or ground (below) radiance along the unit direction d.
-  Color sky_radiance(const Vec3f& d) const { return sky_radiance_d(d.x, d.y, d.z); }
-  Color sky_radiance_d(double dx, double dy, double dz) const {
-    if (!(dy > 0.0)) return m_ground;
-    double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-    dx /= len, dy /= len, dz /= len;
-    // Angle to the sun from atan2(|d x s|, d . s): accurate also near the sun.
-    const double* s = m_sun_dir_d;
-    double cx = dy * s[2] - dz * s[1], cy = dz * s[0] - dx * s[2], cz = dx * s[1] - dy * s[0];
-    // NOTE: cos(gamma) is the dot product over the hypotenuse (not the cosine of the angle),
-    // and the angle itself needs only float accuracy (exp(D gamma), |D| < 2): fast_atan2
-    // (the double atan2 was the sky's largest cost in a profile of a daylight frame).
-    const double sin_g = std::sqrt(cx * cx + cy * cy + cz * cz), cos_g = dx * s[0] + dy * s[1] + dz * s[2];
-    const double gamma = double(fast_atan2(float(sin_g), float(cos_g)));
-    const double cos_gamma = cos_g / std::sqrt(sin_g * sin_g + cos_g * cos_g), inv_cos_theta = 1.0 / dy;
-    double v[3];
+  /// NOTE: in float: the model's own accuracy is a few percent (Preetham sec. 3), and float keeps
+  /// the radiance within ~1e-6 relative of the double evaluation; the double version's divisions
+  /// and square roots were most of the sky's cost in a daylight frame's profile. Out of line: with
+  /// FMA contraction (GCC's default -ffp-contract=fast) copies inlined into sample() and le()
+  /// rounded differently, and a sample's radiance must equal le() of its direction bit for bit.
+  [[gnu::noinline]] Color sky_radiance(const Vec3f& dir) const {
+    if (!(dir.y > 0.f)) return m_ground;
+    const Vec3f d = dir * (1.f / length(dir));
+    // Angle to the sun from atan2(|d x s|, d . s): accurate also near the sun; cos(gamma) is the
+    // dot product over the hypotenuse, and the angle from fast_atan2 (exp(D gamma), |D| < 2).
+    const Vec3f c = cross(d, m_sun_dir);
+    const float sin_g = length(c), cos_g = dot(d, m_sun_dir);
+    const float gamma = fast_atan2(sin_g, cos_g);
+    const float cos_gamma = cos_g / std::sqrt(sin_g * sin_g + cos_g * cos_g), inv_cos_theta = 1.f / d.y;
+    float v[3];
     for (int k = 0; k < 3; ++k) v[k] = m_zenith_over_f0[k] * perez(m_coef[k], inv_cos_theta, gamma, cos_gamma);
-    return xyY_to_linear_srgb(v[1], v[2], v[0] * m_scale);
+    // xyY -> XYZ -> linear sRGB (cie.h's xyY_to_linear_srgb in float).
+    const float big_y = v[0] * m_scale, x = v[1], y = v[2];
+    if (!(y > 0.f) || !(big_y > 0.f)) return Color(0.f);
+    const float y_over = big_y / y, cx = x * y_over, cz = (1.f - x - y) * y_over;
+    return Color(std::max(3.2404542f * cx - 1.5371385f * big_y - 0.4985314f * cz, 0.f),
+                 std::max(-0.9692660f * cx + 1.8760108f * big_y + 0.0415560f * cz, 0.f),
+                 std::max(0.0556434f * cx - 0.2040259f * big_y + 1.0572252f * cz, 0.f));
   }
 
   double m_sun_dir_d[3];
-  PerezCoefficients m_coef[3];  // Y, x, y
-  double m_zenith_over_f0[3];   // zenith value / F(0, theta_s) for Y, x, y
-  double m_scale;               // kcd/m^2 -> renderer units, times strength
+  Vec3f m_sun_dir;
+  PerezCoefficientsF m_coef[3];  // Y, x, y
+  float m_zenith_over_f0[3];     // zenith value / F(0, theta_s) for Y, x, y
+  float m_scale;                 // kcd/m^2 -> renderer units, times strength
   Color m_ground;
   std::shared_ptr<Light> m_sun;
   float m_sun_prob = 0.f;
