@@ -146,6 +146,40 @@ def test_a_real_occluder_hides_the_objects_behind_it(photo_dir, tmp_path):
             assert "dropped" in o or o["bbox"][0] >= W // 2
 
 
+@pytest.mark.parametrize("outline", ["box", "polygon"])
+def test_nothing_stands_behind_a_real_object_known_by_its_box_alone(photo_dir, tmp_path, outline):
+    """A box label would hide what stands behind it by its whole rectangle (background corners
+    included: a rectangular notch in the object), so placement puts nothing behind one; the same
+    object outlined by a polygon hides exactly, and objects do go behind it (the control: the
+    test can fail)."""
+    d, _ = photo_dir
+    p = tmp_path / "photos"
+    p.mkdir()
+    os.symlink(d / "street.exr", p / "street.exr")
+    x0, y0, x1, y1 = 40, 62, 150, 112  # a wide real object in the middle of the ground
+    label = (f"box: [{x0}, {y0}, {x1}, {y1}]" if outline == "box" else
+             f"polygon: [[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}]]")
+    (p / "street.exr.yaml").write_text(CALIBRATION + f"objects:\n  - {{class: box, {label}}}\n")
+    sc = sg.Scenario(_scenario(tmp_path, count=6, objects=4, extra="  max_real_overlap: 0.9"))
+    occluded = placed = 0
+    for f in sc.frames():
+        occ = f.meta["background"]["real_occlusion"]
+        occluded += occ["pixels"]
+        for o in f.meta["objects"]:
+            if "dropped" in o:
+                continue
+            placed += 1
+            bx, by, bw, bh = o["bbox"]
+            overlaps = bx < x1 and bx + bw > x0 and by < y1 and by + bh > y0
+            if outline == "box" and overlaps:
+                assert by + bh >= y1 - 1, f"an object stands behind the box label: {o['bbox']}"
+    assert placed >= 8
+    if outline == "box":
+        assert occluded == 0
+    else:
+        assert occluded > 0
+
+
 def sc_photo(d):
     return sg.read_image(str(d / "street.exr"))
 

@@ -38,7 +38,8 @@ class PhotoPlacement:
     """Where objects may stand in a photo: spots drawn in its placement region (pixels; by
     default the image below the horizon), at min..max distance, whose footprint lies in the
     region, and which hides little of a real object or an ignore region behind it, and is
-    hidden little by one in front of it (at most ``max_overlap`` of the farther box)."""
+    hidden little by one in front of it (at most ``max_overlap`` of the farther box) -- and not
+    at all by one known only by its box."""
 
     fp: FramePhoto
     camera: Any
@@ -49,6 +50,7 @@ class PhotoPlacement:
 
     def __post_init__(self):
         self.real_boxes = [tuple(o.box) for o in self.fp.objects]
+        self.real_outlined = [o.polygon is not None for o in self.fp.objects]
         w, h = self.camera.width, self.camera.height
         if self.fp.regions:
             self.polys = self.fp.regions
@@ -99,7 +101,8 @@ class PhotoPlacement:
 
     def accepts(self, corners_world: np.ndarray) -> bool:
         """An object whose box has these 8 world corners: its footprint (the 4 lowest corners) in
-        the region, its image box over no real box by more than max_overlap of that box."""
+        the region, its image box over no real box by more than max_overlap of the farther one's
+        box, and behind no real object known only by its box (no polygon)."""
         low = corners_world[np.argsort(corners_world[:, 1])[:4]]
         uv = [self.camera.project([float(c) for c in p]) for p in low]
         if any(p is None for p in uv):
@@ -114,14 +117,19 @@ class PhotoPlacement:
         if box is None:
             return False
         own = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
-        for rb in self.real_boxes:
+        for rb, outlined in zip(self.real_boxes, self.real_outlined):
             ix = max(0.0, min(box[2], rb[2]) - max(box[0], rb[0]))
             iy = max(0.0, min(box[3], rb[3]) - max(box[1], rb[1]))
             area = (rb[2] - rb[0]) * (rb[3] - rb[1])
             # Whichever is farther (its box's bottom higher in the image: both stand on the
             # ground) is hidden by the other: at most max_overlap of it.
-            hidden = area if rb[3] < box[3] else own
-            if hidden > 0 and ix * iy / hidden > self.max_overlap:
+            real_in_front = rb[3] >= box[3]
+            hidden = own if real_in_front else area
+            # A real object known only by its box would hide the inserted one by that whole
+            # rectangle, background corners included (a rectangular notch cut out of the object):
+            # nothing inserted stands behind one.
+            limit = self.max_overlap if outlined or not real_in_front else 0.0
+            if hidden > 0 and ix * iy / hidden > limit:
                 return False
         return True
 
@@ -258,16 +266,19 @@ def exposure_factor(photo: np.ndarray, without: np.ndarray, synthetic_alpha: np.
 
 
 def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
-    """H x W camera-space depth of the photo's real objects (and ignore regions) as the
-    calibration places them: each stands on the ground at its box's bottom edge, upright, so
+    """H x W camera-space depth of the photo's outlined real objects (and ignore regions) as
+    the calibration places them: each stands on the ground at its box's bottom edge, upright, so
     its depth is that of the ground point below its bottom centre (a billboard over its
-    polygon, or its box); +inf elsewhere. Where a real object is nearer than an inserted one,
-    it hides it."""
+    polygon); +inf elsewhere. Where a real object is nearer than an inserted one, it hides it.
+    One known only by its box hides nothing: its rectangle's corners are background, and
+    placement (PhotoPlacement.accepts) puts nothing behind it."""
     h, w = camera.height, camera.width
     out = np.full((h, w), np.inf, np.float32)
     wfc = np.asarray(camera.world_from_camera, np.float64)
     cfw = np.linalg.inv(wfc)
     for o in fp.objects:
+        if o.polygon is None:
+            continue
         x0, y0, x1, y1 = o.box
         full = getattr(o, "full_box", list(o.box))
         if full[3] > h + 0.5:
@@ -278,7 +289,7 @@ def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
             continue
         g = org + (-org[1] / d[1]) * d
         z = float((cfw @ np.r_[g, 1.0])[2])
-        out = np.where(object_mask(o.polygon, o.box, w, h), np.minimum(out, z), out)
+        out = np.where(polygon_mask(o.polygon, w, h), np.minimum(out, z), out)
     return out
 
 

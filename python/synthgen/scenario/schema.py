@@ -151,7 +151,8 @@ BACKGROUND = Record(
      "max_distance": Number(40.0, min=0.0, min_open=True, doc="and at most this far"),
      "max_real_overlap": Number(0.5, min=0.0, max=1.0,
                                 doc="an inserted object and a real object (or an ignore region) may overlap by at most "
-                                    "this fraction of the farther one's box (the one hidden)"),
+                                    "this fraction of the farther one's box (the one hidden); none may stand behind "
+                                    "a real object known only by its box (its rectangle would cut it)"),
      "dome": Bool(True, doc="the photo projected onto a distant dome is what the objects reflect (envmap "
                              "reflection_only: seen by glossy and specular bounces only, in the render's units by a "
                              "low-resolution pre-pass's exposure)"),
