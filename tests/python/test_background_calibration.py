@@ -16,7 +16,7 @@ from synthgen import primitives as P
 from synthgen.background.calibration import (Calibration, ground_from_horizon, ground_from_plane, sun_direction,
                                              sun_from_shadow, world_from_camera)
 from synthgen.background.formats import focal_from_exif, read_cityscapes_camera, read_kitti_calib
-from synthgen.background.labels import polygon_mask, read_labels
+from synthgen.background.labels import PolygonSet, points_in_polygons, polygon_mask, read_labels
 from synthgen.background.photos import apply_orientation, expand_photos, jpeg_quality, load_photo
 from synthgen.background.preview import label_checks
 from synthgen.background.sidecar import read_photo_setup
@@ -189,6 +189,37 @@ def test_label_formats(tmp_path):
         read_labels(str(tmp_path / "a.json"), "labelme", "a.jpg", (100, 50))
     m = polygon_mask(np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float), 20, 20)
     assert m.sum() == 100
+
+
+def test_points_in_polygons_matches_the_even_odd_rule_edge_by_edge():
+    """PolygonSet (plain Python for a few points and edges, NumPy over points x edges for many)
+    answers exactly as the even-odd rule applied edge by edge, concave polygons, horizontal edges,
+    vertices on the points' rows and several polygons included."""
+    def reference(polygons, pts):
+        out = np.zeros(len(pts), bool)
+        for p in polygons:
+            inside = np.zeros(len(pts), bool)
+            for (ax, ay), (bx, by) in zip(p, np.roll(p, -1, axis=0)):
+                if ay != by:
+                    inside ^= ((ay > pts[:, 1]) != (by > pts[:, 1])) & (
+                        pts[:, 0] < ax + (pts[:, 1] - ay) * (bx - ax) / (by - ay))
+            out |= inside
+        return out
+
+    rng = np.random.default_rng(3)
+    small = large = 0
+    for _ in range(300):
+        polys = [np.round(rng.uniform(0, 20, (int(rng.integers(3, 12)), 2)) * 2) / 2
+                 for _ in range(int(rng.integers(1, 3)))]
+        pts = np.round(rng.uniform(-2, 22, (int(rng.integers(1, 400)), 2)) * 2) / 2
+        got = PolygonSet(polys).contains(pts)
+        assert np.array_equal(got, reference(polys, pts))
+        assert np.array_equal(points_in_polygons(polys, pts), got)
+        small += len(pts) * max(len(p) for p in polys) <= 256
+        large += len(pts) * max(len(p) for p in polys) > 256
+    assert small > 20 and large > 20  # both ways were checked
+    square = PolygonSet([np.array([[0, 0], [10, 0], [10, 10], [0, 10]], float)])
+    assert square.contains([[5, 5], [15, 5], [5, 10.5]]).tolist() == [True, False, False]
 
 
 def _photo(tmp_path, name="road.png", w=320, h=180):

@@ -19,7 +19,7 @@ from .._core import SynthgenError
 from .formats import MAX_CALIB_BYTES
 
 __all__ = ["RealObject", "read_labels", "LABEL_FORMATS", "polygon_mask", "box_mask", "object_mask", "box_of",
-           "points_in_polygons"]
+           "points_in_polygons", "PolygonSet"]
 
 LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti")
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
@@ -205,20 +205,49 @@ def read_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping
     return out
 
 
+class PolygonSet:
+    """Polygons prepared for many point-in-polygon queries (their edges extracted once)."""
+
+    def __init__(self, polygons):
+        self.edges = []  # per polygon: arrays ax, ay, bx, by of its non-horizontal edges
+        for p in polygons:
+            p = np.asarray(p, np.float64)
+            q = np.roll(p, -1, axis=0)
+            keep = p[:, 1] != q[:, 1]  # horizontal edges cross no horizontal ray
+            self.edges.append((p[keep, 0], p[keep, 1], q[keep, 0], q[keep, 1]))
+        self.edge_lists = [list(zip(*(a.tolist() for a in e))) for e in self.edges]
+
+    def contains(self, pts) -> np.ndarray:
+        """Whether each point (N x 2) lies inside one of the polygons (even-odd rule)."""
+        pts = np.asarray(pts, np.float64).reshape(-1, 2)
+        out = np.zeros(len(pts), bool)
+        for (ax, ay, bx, by), edges in zip(self.edges, self.edge_lists):
+            if not edges:
+                continue
+            # NOTE: the same IEEE double arithmetic per (point, edge) either way, so the same
+            # answer: a few points against a few edges (placement tests a few points per
+            # candidate spot, thousands of times a frame) in plain Python, whose floats beat
+            # NumPy's per-call overhead there; else all edges at once (points x edges) with the
+            # crossings' parity per point, the points in chunks of at most ~2^20 (point, edge) pairs.
+            if len(pts) * len(edges) <= 256:
+                for i, (x, y) in enumerate(pts.tolist()):
+                    odd = False
+                    for eax, eay, ebx, eby in edges:
+                        if (eay > y) != (eby > y) and x < eax + (y - eay) * (ebx - eax) / (eby - eay):
+                            odd = not odd
+                    out[i] |= odd
+                continue
+            step = max(1, (1 << 20) // len(edges))
+            for i in range(0, len(pts), step):
+                x, y = pts[i:i + step, 0:1], pts[i:i + step, 1:2]
+                cross = ((ay > y) != (by > y)) & (x < ax + (y - ay) * (bx - ax) / (by - ay))
+                out[i:i + step] |= (np.count_nonzero(cross, axis=1) & 1).astype(bool)
+        return out
+
+
 def points_in_polygons(polygons, pts: np.ndarray) -> np.ndarray:
     """Whether each point (N x 2) lies inside one of the polygons (even-odd rule)."""
-    pts = np.asarray(pts, np.float64).reshape(-1, 2)
-    out = np.zeros(len(pts), bool)
-    for p in polygons:
-        p = np.asarray(p, np.float64)
-        inside = np.zeros(len(pts), bool)
-        for (ax, ay), (bx, by) in zip(p, np.roll(p, -1, axis=0)):
-            if ay == by:
-                continue
-            cond = (ay > pts[:, 1]) != (by > pts[:, 1])
-            inside ^= cond & (pts[:, 0] < ax + (pts[:, 1] - ay) * (bx - ax) / (by - ay))
-        out |= inside
-    return out
+    return PolygonSet(polygons).contains(pts)
 
 
 def polygon_mask(polygon: np.ndarray, width: int, height: int) -> np.ndarray:

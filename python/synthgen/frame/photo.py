@@ -15,7 +15,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ..background.labels import object_mask, points_in_polygons, polygon_mask
+from ..background.labels import PolygonSet, object_mask, polygon_mask
 from ..background.photoset import FramePhoto
 from ..post.photo.composite import composite
 
@@ -62,6 +62,7 @@ class PhotoPlacement:
             vl = v0 + (v1 - v0) * (0 - u0) / (u1 - u0) + m
             vr = v0 + (v1 - v0) * (w - u0) / (u1 - u0) + m
             self.polys = [np.array([[0.0, vl], [w, vr], [w, h], [0.0, h]])]
+        self.region = PolygonSet(self.polys)
         allp = np.concatenate(self.polys)
         self.bounds = (max(allp[:, 0].min(), 0.0), max(allp[:, 1].min(), 0.0), min(allp[:, 0].max(), w),
                        min(allp[:, 1].max(), h))
@@ -82,7 +83,7 @@ class PhotoPlacement:
         cam = np.asarray(self.camera.world_from_camera, np.float64)[:3, 3]
         for _ in range(50):
             uv = np.array([[rng.uniform(x0, x1), rng.uniform(y0, y1)]])
-            if not points_in_polygons(self.polys, uv)[0]:
+            if not self.region.contains(uv)[0]:
                 continue
             g = self._ground(*uv[0])
             if g is None:
@@ -111,7 +112,7 @@ class PhotoPlacement:
         # The region covers the image only: corners outside the image (a truncated object) pass.
         w, h = self.camera.width, self.camera.height
         seen = (uv[:, 0] >= 0) & (uv[:, 0] <= w) & (uv[:, 1] >= 0) & (uv[:, 1] <= h)
-        if not np.all(points_in_polygons(self.polys, uv[seen])):
+        if not np.all(self.region.contains(uv[seen])):
             return False
         box = self.projected_box(corners_world)
         if box is None:
