@@ -1,6 +1,7 @@
 // Python bindings of the camera (PinholeCamera) and of a render's outputs (RenderResult: the
 // Film's buffers as numpy views, no copies).
 #include <array>
+#include <cmath>
 
 #include <pybind11/stl.h>
 
@@ -127,6 +128,25 @@ has its centre at (i + 0.5, j + 0.5). world_from_camera maps camera to world spa
              return py::make_tuple(u, v);
            },
            py::arg("point"), "Continuous image coordinates (u, v) of a world point, or None behind the camera.")
+      .def("project_points",
+           [](const PinholeCamera& c, py::array_t<double, py::array::c_style | py::array::forcecast> points) {
+             if (points.ndim() != 2 || points.shape(1) != 3)
+               throw Error("project_points: expected an N x 3 array of world points");
+             const py::ssize_t n = points.shape(0);
+             py::array_t<double> out({n, py::ssize_t(2)});
+             auto p = points.unchecked<2>();
+             auto o = out.mutable_unchecked<2>();
+             for (py::ssize_t i = 0; i < n; ++i) {
+               // NOTE: the points rounded to float as project() takes them, so both agree exactly.
+               float u, v;
+               const bool seen = c.project({float(p(i, 0)), float(p(i, 1)), float(p(i, 2))}, &u, &v);
+               o(i, 0) = seen ? double(u) : std::nan("");
+               o(i, 1) = seen ? double(v) : std::nan("");
+             }
+             return out;
+           },
+           py::arg("points"),
+           "project() of each row of an N x 3 array of world points: N x 2 (u, v), NaN where behind the camera.")
       .def("generate_ray",
            [](const PinholeCamera& c, float u, float v) {
              Ray r = c.generate_ray(u, v);

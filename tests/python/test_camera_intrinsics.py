@@ -91,3 +91,24 @@ def test_folding_distortion_is_refused_with_the_reason():
         sg.PinholeCamera(K["fx"], K["fy"], K["cx"], K["cy"], K["width"], K["height"], distortion=(-0.9, 0, 0, 0, 0))
     with pytest.raises(sg.SynthgenError, match="folds"):
         sg.PinholeCamera.from_params({"width": 640, "height": 480, "fov_y": 60, "k1": -1.5})
+
+
+@pytest.mark.parametrize("name", list(DISTORTIONS))
+def test_project_points_is_project_of_each_point(name):
+    """project_points (N x 3 at once) gives exactly project() of every point, NaN behind the camera."""
+    cam = sg.PinholeCamera(K["fx"], K["fy"], K["cx"], K["cy"], K["width"], K["height"], distortion=DISTORTIONS[name])
+    rng = np.random.default_rng(4)
+    pts = np.c_[rng.uniform(-20, 20, (500, 2)), rng.uniform(-5, 40, 500)]  # some behind (z < 0)
+    uv = cam.project_points(pts)
+    assert uv.shape == (500, 2) and uv.dtype == np.float64
+    behind = 0
+    for p, q in zip(pts, uv):
+        one = cam.project([float(c) for c in p])
+        if one is None:
+            behind += 1
+            assert np.isnan(q).all()
+        else:
+            assert (q[0], q[1]) == one
+    assert 0 < behind < 500
+    with pytest.raises(sg.SynthgenError, match="N x 3"):
+        cam.project_points(np.zeros((4, 2)))

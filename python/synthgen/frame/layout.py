@@ -10,6 +10,7 @@ still fail are dropped (with the reason in the metadata).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
@@ -105,11 +106,20 @@ def _top(o: PlacedObject) -> float:
     return float(_corners(o)[:, 1].max())
 
 
+@functools.lru_cache(maxsize=1024)
+def _yaw(degrees: float) -> np.ndarray:
+    """P.rotate about +y (float32 4 x 4, read-only): placement asks for the same yaw thousands of
+    times a frame."""
+    m = P.rotate([0.0, 1.0, 0.0], degrees)
+    m.setflags(write=False)
+    return m
+
+
 def _world_corners(o: PlacedObject, x: float, z: float, y: float = 0.0) -> np.ndarray:
     """The 8 world corners of an object's box standing at (x, y, z) with its yaw (as _put puts it)."""
-    base = (P.translate([x, y, z]) @ P.rotate([0.0, 1.0, 0.0], float(o.spec.yaw))).astype(np.float64)
+    base = (P.translate([x, y, z]) @ _yaw(float(o.spec.yaw))).astype(np.float64)
     c = _corners(o)
-    return (np.c_[c, np.ones(len(c))] @ base.T)[:, :3]
+    return (np.concatenate([c, np.ones((len(c), 1))], axis=1) @ base.T)[:, :3]
 
 
 def _on_ground(view: FrameView, camera: PinholeCamera, o: PlacedObject, rng: np.random.Generator,

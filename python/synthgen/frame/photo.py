@@ -94,29 +94,29 @@ class PhotoPlacement:
         return float("nan"), float("nan")
 
     def projected_box(self, corners: np.ndarray) -> Optional[Tuple[float, float, float, float]]:
-        uv = [self.camera.project([float(c) for c in p]) for p in corners]
-        if any(p is None for p in uv):
+        """The image box (x0, y0, x1, y1) of world points, None when one is behind the camera."""
+        uv = self.camera.project_points(np.asarray(corners, np.float64).reshape(-1, 3))
+        if np.isnan(uv).any():
             return None
-        uv = np.array(uv)
         return float(uv[:, 0].min()), float(uv[:, 1].min()), float(uv[:, 0].max()), float(uv[:, 1].max())
 
     def accepts(self, corners_world: np.ndarray) -> bool:
-        """An object whose box has these 8 world corners: its footprint (the 4 lowest corners) in
-        the region, its image box over no real box by more than max_overlap of the farther one's
-        box, and behind no real object known only by its box (no polygon)."""
-        low = corners_world[np.argsort(corners_world[:, 1])[:4]]
-        uv = [self.camera.project([float(c) for c in p]) for p in low]
-        if any(p is None for p in uv):
+        """An object whose box has these 8 world corners: in front of the camera, its footprint
+        (the 4 lowest corners) in the region, its image box over no real box by more than
+        max_overlap of the farther one's box, and behind no real object known only by its box
+        (no polygon)."""
+        corners_world = np.asarray(corners_world, np.float64)
+        uv_all = self.camera.project_points(corners_world)
+        if np.isnan(uv_all).any():
             return False
-        uv = np.array(uv)
+        uv = uv_all[np.argsort(corners_world[:, 1])[:4]]
         # The region covers the image only: corners outside the image (a truncated object) pass.
         w, h = self.camera.width, self.camera.height
         seen = (uv[:, 0] >= 0) & (uv[:, 0] <= w) & (uv[:, 1] >= 0) & (uv[:, 1] <= h)
         if not np.all(self.region.contains(uv[seen])):
             return False
-        box = self.projected_box(corners_world)
-        if box is None:
-            return False
+        box = (float(uv_all[:, 0].min()), float(uv_all[:, 1].min()), float(uv_all[:, 0].max()),
+               float(uv_all[:, 1].max()))
         own = max((box[2] - box[0]) * (box[3] - box[1]), 1e-9)
         for rb, outlined in zip(self.real_boxes, self.real_outlined):
             ix = max(0.0, min(box[2], rb[2]) - max(box[0], rb[0]))
