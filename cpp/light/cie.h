@@ -10,12 +10,15 @@ namespace sg {
 /// CIE XYZ -> linear sRGB (Rec. 709 primaries, D65 white), negative components clamped.
 /// NOTE: matrix of IEC 61966-2-1:1999 to 7 digits as tabulated by B. Lindbloom
 /// ("RGB/XYZ Matrices", brucelindbloom.com); its inverse's Y row is the Rec. 709 luminance
-/// (0.2126, 0.7152, 0.0722), so luminance(rgb) = Y for in-gamut colours.
-inline Color xyz_to_linear_srgb(double x, double y, double z) {
-  double r = 3.2404542 * x - 1.5371385 * y - 0.4985314 * z;
-  double g = -0.9692660 * x + 1.8760108 * y + 0.0415560 * z;
-  double b = 0.0556434 * x - 0.2040259 * y + 1.0572252 * z;
-  return Color(float(std::max(r, 0.0)), float(std::max(g, 0.0)), float(std::max(b, 0.0)));
+/// (0.2126, 0.7152, 0.0722), so luminance(rgb) = Y for in-gamut colours. In double, or in
+/// float for the sky's per-direction radiance (the 7-digit constants round to the same floats
+/// as float literals of them).
+template <class T>
+inline Color xyz_to_linear_srgb(T x, T y, T z) {
+  const T r = T(3.2404542) * x - T(1.5371385) * y - T(0.4985314) * z;
+  const T g = T(-0.9692660) * x + T(1.8760108) * y + T(0.0415560) * z;
+  const T b = T(0.0556434) * x - T(0.2040259) * y + T(1.0572252) * z;
+  return Color(float(std::max(r, T(0))), float(std::max(g, T(0))), float(std::max(b, T(0))));
 }
 
 /// CIE xyY -> XYZ: X = x Y / y, Z = (1 - x - y) Y / y.

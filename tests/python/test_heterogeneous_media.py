@@ -141,7 +141,7 @@ def test_bad_heterogeneous_parameters_are_errors(tmp_path):
 
 
 def test_openvdb_loads_on_first_use(tmp_path):
-    """OpenVDB's libraries (~40 ms) stay out of `import synthgen` until a .vdb file is read or written."""
+    """OpenVDB's libraries stay out of `import synthgen` until a .vdb file is read or written."""
     script = (
         "import numpy as np, synthgen as sg\n"
         "def vdb_mapped():\n"

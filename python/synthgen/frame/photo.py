@@ -93,13 +93,6 @@ class PhotoPlacement:
                 return float(g[0]), float(g[2])
         return float("nan"), float("nan")
 
-    def projected_box(self, corners: np.ndarray) -> Optional[Tuple[float, float, float, float]]:
-        """The image box (x0, y0, x1, y1) of world points, None when one is behind the camera."""
-        uv = self.camera.project_points(np.asarray(corners, np.float64).reshape(-1, 3))
-        if np.isnan(uv).any():
-            return None
-        return float(uv[:, 0].min()), float(uv[:, 1].min()), float(uv[:, 0].max()), float(uv[:, 1].max())
-
     def accepts(self, corners_world: np.ndarray) -> bool:
         """An object whose box has these 8 world corners: in front of the camera, its footprint
         (the 4 lowest corners) in the region, its image box over no real box by more than
