@@ -58,6 +58,15 @@ seed_extra() {  # target -> extra seed files (third-party, not committed)
         case "$f" in *.png) b=80;; *.jpg) b=81;; *.exr) b=82;; *.hdr) b=83;; esac
         { printf "\\x$b"; head -c 65536 "$f"; } > "$2/shared-$(sha1sum "$f" | cut -c1-12)"
       done ;;
+    fuzz_photo)  # photos whole, cut at a quarter and 40 bytes before the end (JPEG, PNG, EXR)
+      for f in $(find ../shared/assets -type f \( -name '*.png' -o -name '*.jpg' -o -name '*.exr' \) 2>/dev/null); do
+        [ "$(stat -c %s "$f")" -lt 65536 ] || continue
+        case "$f" in *.jpg) b=00;; *.png) b=01;; *.exr) b=02;; esac
+        n=$(stat -c %s "$f")
+        for keep in "$n" $((n / 4)) $((n - 40)); do
+          { printf "\\x$b"; head -c "$keep" "$f"; } > "$2/shared-$keep-$(sha1sum "$f" | cut -c1-12)"
+        done
+      done ;;
   esac
 }
 

@@ -126,6 +126,34 @@ def images(tmp: str) -> None:
         put("fuzz_image", "img." + ext, bytes([hint]) + open(path, "rb").read())
 
 
+def photos(tmp: str) -> None:
+    """fuzz_photo: small photos, whole, truncated and corrupted (first byte: 0 jpg, 1 png, 2 exr)."""
+    import OpenImageIO as oiio
+
+    rng = np.random.default_rng(3)
+    img = (rng.random((24, 32, 3)) * 0.8 + 0.1).astype(np.float32)
+    for ext, hint in (("jpg", 0), ("png", 1), ("exr", 2)):
+        path = os.path.join(tmp, "p." + ext)
+        out = oiio.ImageOutput.create(path)
+        spec = oiio.ImageSpec(32, 24, 3, oiio.HALF if ext == "exr" else oiio.UINT8)
+        out.open(path, spec)
+        out.write_image(img if ext == "exr" else (img * 255).astype(np.uint8))
+        out.close()
+        whole = open(path, "rb").read()
+        put("fuzz_photo", f"{ext}-whole", bytes([hint]) + whole)
+        for keep in (len(whole) // 4, len(whole) // 2, len(whole) - 40):
+            put("fuzz_photo", f"{ext}-cut-{keep}", bytes([hint]) + whole[:keep])
+        middle = bytearray(whole)
+        for i in range(len(whole) // 2, len(whole) // 2 + 16):
+            middle[i] ^= 0x5A
+        put("fuzz_photo", f"{ext}-corrupt", bytes([hint]) + bytes(middle))
+        if ext == "jpg":  # libjpeg's harmless "extraneous bytes before marker", then cut
+            end = 4 + int.from_bytes(whole[4:6], "big")
+            padded = whole[:end] + b"\x00\x01\x02" + whole[end:]
+            put("fuzz_photo", "jpg-extraneous", bytes([hint]) + padded)
+            put("fuzz_photo", "jpg-extraneous-cut", bytes([hint]) + padded[:-40])
+
+
 def params() -> None:
     rng = np.random.default_rng(7)
     for i in range(24):
@@ -138,6 +166,7 @@ def main() -> int:
         journal(tmp)
         meshes()
         images(tmp)
+        photos(tmp)
         params()
     print(f"wrote seeds under {os.path.relpath(CORPUS, ROOT)}")
     return 0

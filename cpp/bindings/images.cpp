@@ -1,4 +1,5 @@
 // Python bindings of image reading (through the isolated reader, io/image_io.h).
+#include <algorithm>
 #include <cstring>
 
 #include "bindings/convert.h"
@@ -49,11 +50,20 @@ void bind_images(py::module_& m) {
         info["orientation"] = img.orientation;
         info["exif_focal_mm"] = img.exif_focal_mm;
         info["exif_focal_35mm"] = img.exif_focal_35mm;
+        py::list warnings;
+        for (size_t a = 0; a < img.warnings.size();) {
+          size_t b = std::min(img.warnings.find('\n', a), img.warnings.size());
+          if (b > a) warnings.append(img.warnings.substr(a, b - a));
+          a = b + 1;
+        }
+        info["warnings"] = warnings;
         return py::make_tuple(pixels(img), info);
       },
       py::arg("path"), py::arg("color_space") = "auto",
       "read_image (finite values) and what the file says about itself: (pixels, {format, orientation:\n"
-      "EXIF 1..8, not applied to the pixels; exif_focal_mm, exif_focal_35mm: 0 when absent}).");
+      "EXIF 1..8, not applied to the pixels; exif_focal_mm, exif_focal_35mm: 0 when absent; warnings:\n"
+      "the decoder's harmless metadata warnings, also printed once to stderr}). A decoder's report of\n"
+      "damage (a truncated or corrupt file) raises FileError even where the decoder returned pixels.");
 }
 
 }  // namespace sg::bindings

@@ -1,6 +1,8 @@
 // The OpenImageIO plugin (libsynthgen_oiio.so); see image_io.h.
 #include "io/image_io.h"
 
+#include "io/decoder_messages.h"
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
@@ -30,7 +32,8 @@ double max_pixels() {
 }
 
 /// Captures what format libraries (libpng, libjpeg) print to stderr while it lives, so their
-/// warnings never reach the user's terminal; the text is added to the error of a failed read.
+/// messages never reach the user's terminal unexplained: they are judged with the decoder's own
+/// (io/decoder_messages.h) and become the read's error or its warnings.
 /// NOTE: fd 2 is process-wide: reads are serialised while it is redirected.
 class StderrCapture {
  public:
@@ -41,7 +44,7 @@ class StderrCapture {
     if (m_file && m_saved >= 0) m_active = dup2(fileno(m_file), 2) >= 0;
   }
   ~StderrCapture() { restore(); if (m_file) std::fclose(m_file); }
-  /// Restores stderr; returns what was printed (one line, trimmed).
+  /// Restores stderr; returns what was printed (lines, at most 4 kB).
   std::string restore() {
     if (!m_active) return m_text;
     std::fflush(stderr);
@@ -52,9 +55,6 @@ class StderrCapture {
     char buf[512];
     size_t n;
     while ((n = std::fread(buf, 1, sizeof buf, m_file)) > 0 && m_text.size() < 4096) m_text.append(buf, n);
-    for (char& c : m_text)
-      if (c == '\n') c = ' ';
-    while (!m_text.empty() && m_text.back() == ' ') m_text.pop_back();
     return m_text;
   }
 
@@ -70,12 +70,21 @@ class StderrCapture {
   std::string m_text;
 };
 
-/// One line: format libraries' errors come with newlines.
-std::string one_line(std::string s) {
-  for (char& c : s)
-    if (c == '\n') c = ',';
-  while (!s.empty() && (s.back() == ';' || s.back() == ' ')) s.pop_back();
-  return s;
+/// One line: format libraries' errors come with newlines (empty lines dropped, "; " between).
+std::string one_line(const std::string& s) {
+  std::string out, line;
+  auto flush = [&] {
+    while (!line.empty() && (line.back() == ';' || line.back() == ' ' || line.back() == '\r')) line.pop_back();
+    size_t a = line.find_first_not_of(' ');
+    if (a != std::string::npos) out += (out.empty() ? "" : "; ") + line.substr(a);
+    line.clear();
+  };
+  for (char c : s) {
+    if (c == '\n') flush();
+    else line += c;
+  }
+  flush();
+  return out;
 }
 
 float srgb_to_linear(float c) {
@@ -107,6 +116,9 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
     *error = "cannot decode image (" + one_line(in->geterror()) + ")";
     return false;
   }
+  // A read that succeeded may still have been told of damage (libjpeg's "Premature end of JPEG
+  // file" fills the missing rows with grey): judged by finish_read with the captured stderr.
+  img->warnings = in->geterror();
   *is_float = spec.format.basetype == OIIO::TypeDesc::FLOAT || spec.format.basetype == OIIO::TypeDesc::HALF ||
               spec.format.basetype == OIIO::TypeDesc::DOUBLE;
   *alpha_channel = spec.alpha_channel;
@@ -119,20 +131,66 @@ bool read_all(OIIO::ImageInput* in, ImageData* img, bool* is_float, int* alpha_c
   return true;  // non-finite values are checked by the core where they are not allowed
 }
 
+/// The bytes of `path` (a JPEG to check: io/decoder_messages.h).
+bool read_file(const char* path, std::vector<unsigned char>* out, std::string* error) {
+  std::FILE* f = std::fopen(path, "rb");
+  if (!f) {
+    *error = "cannot open the file again to check its structure";
+    return false;
+  }
+  unsigned char buf[1 << 16];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) out->insert(out->end(), buf, buf + n);
+  const bool ok = !std::ferror(f);
+  std::fclose(f);
+  if (!ok) *error = "cannot read the file again to check its structure";
+  return ok;
+}
+
+/// After read_all: the decoder's messages (in img->warnings) and what the format libraries
+/// printed (`printed`) judged (io/decoder_messages.h), and a JPEG's structure (`jpeg`: its
+/// bytes, else null): damage fails the read, harmless metadata warnings stay in img->warnings
+/// (one line each).
+bool finish_read(ImageData* img, const std::string& printed, const std::vector<unsigned char>* jpeg,
+                 std::string* error) {
+  sg::DecoderVerdict v = sg::classify_decoder_messages(img->warnings + "\n" + OIIO::geterror() + "\n" + printed);
+  img->warnings.clear();
+  if (jpeg) {
+    std::string structure = sg::jpeg_structure_damage(jpeg->data(), jpeg->size());
+    if (!structure.empty()) v.damage.push_back("JPEG structure: " + structure);
+  }
+  if (!v.damage.empty()) {
+    *error = "damaged or truncated image: the decoder reported '" + sg::join_messages(v.damage) +
+             "' (the pixels it returned are not the file's picture)";
+    img->pixels.clear();
+    return false;
+  }
+  for (const std::string& w : v.harmless) img->warnings += (img->warnings.empty() ? "" : "\n") + w;
+  return true;
+}
+
 bool load(const char* path, int space, ImageData* img, std::string* error) {
   try {
     StderrCapture quiet;
+    (void)OIIO::geterror();  // a message left by an earlier file is not this one's
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
-      std::string err = one_line(OIIO::geterror());
+      std::string err = one_line(OIIO::geterror() + "\n" + quiet.restore());
       *error = "cannot read image (" + (err.empty() ? std::string("unknown error") : err) + ")";
       return false;
     }
     bool is_float;
     int alpha;
-    if (!read_all(in.get(), img, &is_float, &alpha, error)) return false;
+    if (!read_all(in.get(), img, &is_float, &alpha, error)) {
+      std::string printed = one_line(quiet.restore());
+      if (!printed.empty() && error->find(printed) == std::string::npos) *error += " [" + printed + "]";
+      return false;
+    }
     in->close();
-    quiet.restore();
+    img->warnings += "\n" + in->geterror();
+    std::vector<unsigned char> jpeg;
+    if (img->format == "jpeg" && !read_file(path, &jpeg, error)) return false;
+    if (!finish_read(img, quiet.restore(), img->format == "jpeg" ? &jpeg : nullptr, error)) return false;
     auto cs = sg::ColorSpace(space);
     bool decode = cs == sg::ColorSpace::SRGB || (cs == sg::ColorSpace::Auto && !is_float);
     if (decode) {
@@ -163,6 +221,7 @@ bool load_memory(const void* data, size_t size, const char* hint, ImageData* img
     void* proxy = &reader;
     config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
     StderrCapture quiet;
+    (void)OIIO::geterror();  // a message left by an earlier file is not this one's
     auto in = OIIO::ImageInput::open(std::string("embedded.") + hint, &config, &reader);
     if (!in) {
       *error = "cannot decode embedded image (" + one_line(OIIO::geterror()) + ")";
@@ -170,7 +229,12 @@ bool load_memory(const void* data, size_t size, const char* hint, ImageData* img
     }
     bool is_float;
     int alpha;
-    return read_all(in.get(), img, &is_float, &alpha, error);
+    if (!read_all(in.get(), img, &is_float, &alpha, error)) return false;
+    in->close();
+    img->warnings += "\n" + in->geterror();
+    std::vector<unsigned char> jpeg;
+    if (img->format == "jpeg") jpeg.assign(static_cast<const unsigned char*>(data), static_cast<const unsigned char*>(data) + size);
+    return finish_read(img, quiet.restore(), img->format == "jpeg" ? &jpeg : nullptr, error);
   } catch (const std::bad_alloc&) {
     *error = "out of memory while decoding the image";
     return false;

@@ -24,11 +24,16 @@ struct ImageData {
   int orientation = 1;         ///< EXIF orientation 1..8 (not applied to `pixels`)
   float exif_focal_mm = 0.f;   ///< EXIF FocalLength, millimetres (0: absent)
   float exif_focal_35mm = 0.f; ///< EXIF FocalLengthIn35mmFilm, millimetres (0: absent)
+  /// The decoder's harmless metadata warnings, one a line (io/decoder_messages.h); a decoder's
+  /// report of damage fails the read instead.
+  std::string warnings;
 };
 
 /// Reads an image. With ColorSpace::Auto, 8/16-bit integer formats (PNG, JPEG, TIFF)
 /// are treated as sRGB-encoded and decoded to linear; float formats (EXR, HDR) as linear.
-/// Throws sg::FileError naming the file on failure.
+/// Throws sg::FileError naming the file on failure, also when the decoder reported damage but
+/// returned pixels (a truncated JPEG: io/decoder_messages.h); harmless metadata warnings are
+/// in `warnings` and printed to stderr once per file and message ("synthgen: warning: ...").
 ///
 /// The decoding runs in the synthgen-reader process (core/isolate.h) with time and memory
 /// limits: a file that crashes or hangs a format library becomes a FileError, not a dead run.
@@ -95,6 +100,10 @@ std::vector<std::vector<float>> load_mip_rects(const std::string& path, int leve
 /// when the plugin cannot be loaded.
 void load_image_plugin();
 
+/// Prints each of `warnings` (one a line: ImageData::warnings) to stderr as "synthgen: warning:
+/// WHAT: message", once per file and message in this process.
+void report_image_warnings(const std::string& what, const std::string& warnings);
+
 /// Function table exported by the plugin (C linkage; no exceptions cross it).
 struct ImageIoApi {
   int version;
@@ -108,7 +117,7 @@ struct ImageIoApi {
   bool (*load_mip_rects)(const char* path, int level, const TexelRect* rects, int count, int chbegin, int chend,
                          std::vector<std::vector<float>>* out, std::string* error);
 };
-constexpr int k_image_io_api_version = 4;
+constexpr int k_image_io_api_version = 5;  // 5: ImageData::warnings
 
 }  // namespace sg
 

@@ -1,5 +1,7 @@
 // Loads the OpenImageIO plugin (libsynthgen_oiio.so) on first use; see image_io.h.
 #include <cmath>
+#include <cstdio>
+#include <set>
 #include <filesystem>
 #include <mutex>
 
@@ -49,6 +51,22 @@ void check_regular_file(const std::string& path, const char* what) {
 
 }  // namespace
 
+void report_image_warnings(const std::string& what, const std::string& warnings) {
+  if (warnings.empty()) return;
+  static std::mutex mutex;
+  static std::set<std::string> said;
+  std::lock_guard<std::mutex> lock(mutex);
+  size_t start = 0;
+  while (start < warnings.size()) {
+    size_t end = std::min(warnings.find('\n', start), warnings.size());
+    std::string line = warnings.substr(start, end - start);
+    start = end + 1;
+    if (line.empty() || said.size() > 10000 || !said.insert(what + '\n' + line).second) continue;
+    std::fprintf(stderr, "synthgen: warning: %s: %s (a metadata warning of the decoder: the pixels are intact)\n",
+                 what.c_str(), line.c_str());
+  }
+}
+
 static void check_finite(const ImageData& img, const std::string& what) {
   for (float v : img.pixels)
     if (!std::isfinite(v))
@@ -74,6 +92,7 @@ void write_image_data(Writer& w, const ImageData& image) {
   w.pod(int32_t(image.orientation));
   w.pod(image.exif_focal_mm);
   w.pod(image.exif_focal_35mm);
+  w.str(image.warnings);
 }
 
 ImageData read_image_data(Reader& r, const std::string& what) {
@@ -86,6 +105,7 @@ ImageData read_image_data(Reader& r, const std::string& what) {
   img.orientation = r.pod<int32_t>();
   img.exif_focal_mm = r.pod<float>();
   img.exif_focal_35mm = r.pod<float>();
+  img.warnings = r.str();
   if (img.orientation < 1 || img.orientation > 8 || !std::isfinite(img.exif_focal_mm) ||
       !std::isfinite(img.exif_focal_35mm))
     throw FileError(what, "malformed image from the isolated reader (its EXIF fields)");
@@ -109,6 +129,7 @@ ImageData load_image(const std::string& path, ColorSpace space, bool allow_nonfi
   Reader r(bytes, path);
   ImageData img = read_image_data(r, path);
   if (!r.done()) throw FileError(path, "malformed image from the isolated reader (trailing data)");
+  report_image_warnings(path, img.warnings);
   return img;
 }
 
@@ -118,6 +139,7 @@ ImageData load_image_from_memory(const void* data, size_t size, const std::strin
   std::string err;
   if (!api().load_memory(data, size, format_hint.c_str(), &img, &err)) throw FileError(what, err);
   check_finite(img, what);
+  report_image_warnings(what, img.warnings);
   return img;
 }
 

@@ -66,6 +66,17 @@ def read_depth(setup: PhotoSetup, width: int, height: int) -> np.ndarray:
     return np.where(np.isfinite(z) & (z > 0), z, np.inf).astype(np.float32)
 
 
+def occluder_mask(setup: PhotoSetup, photo: Photo) -> np.ndarray:
+    """The photo's occluder mask (H x W bool: real things in front of every inserted object)."""
+    from .._core import read_image
+
+    m = read_image(setup.occluders, "linear")
+    if m.shape[:2] != (photo.height, photo.width):
+        raise SynthgenError(f"{setup.occluders}: the occluder mask is {m.shape[1]} x {m.shape[0]}, the photo "
+                            f"{photo.width} x {photo.height}")
+    return m[:, :, 0] > 0.5
+
+
 def nearest_crop(a: np.ndarray, sw: int, sh: int, crop: Tuple[int, int, int, int]) -> np.ndarray:
     """A per-pixel map (H x W) of the photo resized to sw x sh by nearest neighbour (depths and
     masks are not blended across edges), then cropped."""
@@ -198,11 +209,21 @@ class PhotoSet:
         return out
 
     def check(self, class_names: List[str]) -> int:
-        """Reads every photo and its calibration once (validation); refuses a photo without real
-        labels unless unlabelled_ok. Returns the number of photos."""
+        """Reads every photo and its calibration once (validation), and decodes the depth map,
+        occluder mask and environment map each names (a damaged file is an error here, not in a
+        frame); refuses a photo without real labels unless unlabelled_ok. Returns the number of
+        photos."""
+        from .._core import read_image
+
         for i, path in enumerate(self.paths):
             p = self.photo(i)
             s = self.setup(i, p)
+            if s.depth is not None:
+                read_depth(s, p.width, p.height)
+            if s.occluders is not None:
+                occluder_mask(s, p)
+            if s.envmap is not None:
+                read_image(s.envmap[0], "linear")
             if not s.labelled and not self.bg["unlabelled_ok"]:
                 raise SynthgenError(
                     f"{path}: the photo declares no real labels (labels or objects in its calibration): real "
@@ -272,12 +293,6 @@ class PhotoSet:
                 self._depths = {photo.path: read_depth(setup, photo.width, photo.height)}
             fp.depth = nearest_crop(self._depths[photo.path], sw, sh, fp.crop)
         if setup.occluders is not None:
-            from .._core import read_image
-
-            m = read_image(setup.occluders, "linear")
-            if m.shape[:2] != (photo.height, photo.width):
-                raise SynthgenError(f"{setup.occluders}: the occluder mask is {m.shape[1]} x {m.shape[0]}, the photo "
-                                    f"{photo.width} x {photo.height}")
-            fp.occluders = nearest_crop(m[:, :, 0] > 0.5, sw, sh, fp.crop)
+            fp.occluders = nearest_crop(occluder_mask(setup, photo), sw, sh, fp.crop)
         return fp
 
