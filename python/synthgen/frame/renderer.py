@@ -25,12 +25,13 @@ from ..outputs.render import camera_meta
 from ..scenario import Scenario, frame_rng, sample_frame
 from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
 from ..scenario.schema import RENDER_KEYS
+from ..schema.plugins import realize
 from ..scene import primitives as P
 from ..scene.vehicles import AXES, model_axes
 from .layout import FrameView, search_layout, tilted
 from .lod import amodal_and_levels
 from .records import PlacedObject, frame_camera, level_frame, object_records, weather_labels
-from .resources import FrameLibrary, Pool, Shape, Shapes, realize
+from .resources import FrameLibrary, Pool, Shape, Shapes
 
 __all__ = ["FrameRenderer", "FrameSetup", "light_plugin"]
 
