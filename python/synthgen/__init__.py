@@ -52,7 +52,7 @@ def _srgb8(self: RenderResult):
 RenderResult.srgb8 = _srgb8
 
 #: Public names imported on first use (they pull in the scenario and frame machinery).
-_LAZY = {"Scenario": ("frame.api", "Scenario"), "FrameData": ("frame.data", "FrameData"),
+_LAZY = {"Scenario": ("frame.api", "Scenario"), "FrameData": ("outputs.data", "FrameData"),
          "read_dataset": ("outputs.read", "read_dataset"), "Dataset": ("outputs.read", "Dataset")}
 
 
