@@ -56,6 +56,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from vs_cycles_scenes import (CBOX_DIR, HDR_DIR, _sg, build_spec, spec_digest, synthgen_render,  # noqa: E402
                               synthgen_scene)  # noqa: F401  (tests/python/test_vs_cycles_reference.py)
 from synthgen.bench.peers import read_exr, run_cycles  # noqa: E402
+from vs_cycles_common import _fmt, mean_diff_pct  # noqa: E402
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), ".."))
 TEST_REF_DIR = os.path.join(REPO, "tests", "python", "references", "cycles")
@@ -147,15 +148,6 @@ def psnr(img: np.ndarray, ref: np.ndarray, peak_of: np.ndarray | None = None) ->
     peak = float(np.percentile((ref if peak_of is None else peak_of).max(axis=-1), 99.0))
     mse = float(np.mean((img.astype(np.float64) - ref.astype(np.float64)) ** 2))
     return float("inf") if mse == 0 else 10.0 * math.log10(peak * peak / mse)
-
-
-def mean_diff_pct(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Per channel, 100 (mean(a) / mean(b) - 1)."""
-    return 100.0 * (a.astype(np.float64).mean(axis=(0, 1)) / b.astype(np.float64).mean(axis=(0, 1)) - 1.0)
-
-
-def _fmt(v) -> str:
-    return ",".join(f"{x:.4g}" for x in v)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -7,9 +7,10 @@ import tempfile
 
 import numpy as np
 
-from vs_cycles import _fmt, mean_diff_pct, run_cycles
+from vs_cycles_common import _fmt, mean_diff_pct
 from vs_cycles_scenes import (CBOX_DIR, HDR_DIR, _camera_entry, _mesh_entry, _rows, _sg, available_plugins, build_spec,
     envmap_params, synthgen_render)
+from synthgen.bench.peers import run_cycles  # (vs_cycles_scenes puts python/ on sys.path)
 
 # ---------------------------------------------------------------------------------------------
 # --check: conversions verified numerically

@@ -29,8 +29,9 @@ import synthgen
 from synthgen import cli, outputs, post, randomize
 from synthgen.background.sidecar import CALIBRATION_SCHEMA
 from synthgen.scenario import SCENARIO_SCHEMA
+from synthgen.scenario.schema import format_scenario_schema
 from synthgen.schema.plugins import plugin_info, plugin_names
-from synthgen.schema.reference import format_scenario_schema, format_schema
+from synthgen.schema.reference import format_schema
 from synthgen.scene.scene_file import SCENE_SCHEMA
 
 ROOT = Path(__file__).resolve().parents[1]

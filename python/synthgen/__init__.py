@@ -9,16 +9,20 @@ out by workflow stage, a subpackage each:
 ``schema``            YAML with positions, typed fields, errors, distributions; the plugin
                       records generated from the C++ declarations
 ``scene``             scene files, primitives, the demo, wear presets, plates, signs, assets
-``scenario``          scenarios: validation and the typed records of one frame
 ``background``        real photos: calibrations, real labels, the photos of a run
-``randomize``         object randomizers: sign, plate, decals, wear
-``frame``             the per-worker frame renderer (set-up, layout, records)
-``run``               executors, resume, run summaries
-``outputs``           one module per output format, verification
 ``post``              image-space steps (exposure, ...; ``post.photo``: compositing into
                       photos, camera matching)
+``outputs``           one module per output format, verification, reading a dataset back
+``randomize``         object randomizers: sign, plate, decals, wear; weather
+``scenario``          scenarios: validation and the typed records of one frame
+``frame``             the per-worker frame renderer (set-up, layout, records), the gallery
+``run``               executors, resume, run summaries
+``bench``             speed against accuracy, peer renderers
 ``cli``               one module per ``synthgen`` command
 ====================  ===================================================================
+
+Each stage imports only from the stages listed before it (docs/architecture.md;
+tests/python/test_import_graph.py).
 
 In memory and back: ``synthgen.Scenario(path).frames()`` renders frames as arrays and labels
 (:class:`synthgen.FrameData`) without files; ``synthgen.read_dataset(dir)`` reads a dataset
@@ -52,7 +56,7 @@ def _srgb8(self: RenderResult):
 RenderResult.srgb8 = _srgb8
 
 #: Public names imported on first use (they pull in the scenario and frame machinery).
-_LAZY = {"Scenario": ("frame.api", "Scenario"), "FrameData": ("frame.data", "FrameData"),
+_LAZY = {"Scenario": ("frame.api", "Scenario"), "FrameData": ("outputs.data", "FrameData"),
          "read_dataset": ("outputs.read", "read_dataset"), "Dataset": ("outputs.read", "Dataset")}
 
 

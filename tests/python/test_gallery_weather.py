@@ -4,7 +4,7 @@ import os
 
 import numpy as np
 
-from synthgen.scene import gallery
+from synthgen.frame import gallery
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TINY = os.path.join(HERE, "scenarios", "tiny.yaml")

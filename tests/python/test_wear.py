@@ -93,7 +93,7 @@ def test_model_without_uvs_carries_rust_scratches_ice_and_dirt():
 
 
 def test_gallery_renders_every_effect_on_every_object():
-    from synthgen.scene import gallery
+    from synthgen.frame import gallery
 
     img = gallery.render_gallery(tile_w=48, tile_h=36, spp=1)
     rows, cols = len(gallery.OBJECTS), len(gallery.EFFECTS)
@@ -325,7 +325,7 @@ def test_scratch_clusters_gather_at_the_edges_of_a_library_car(tmp_path):
 def test_the_car_row_shows_every_effect_on_the_library_car():
     """The gallery's car row (docs/gallery_car.png): the library car, clean and with each effect;
     every effect changes its tile (rendered small here)."""
-    from synthgen.scene import gallery
+    from synthgen.frame import gallery
 
     _asset(CAR)
     w, h = 160, 120

@@ -18,53 +18,9 @@ from .._core import SynthgenError
 from .labels import RealObject
 from ..scene.assets import file_sha256
 from .photos import Photo, expand_photos, load_photo
-from .sidecar import PhotoSetup, find_calibration_files, read_photo_setup
+from .sidecar import PhotoSetup, find_calibration_files, read_depth, read_photo_setup
 
 __all__ = ["PhotoSet", "FramePhoto", "resize_linear", "read_depth", "nearest_crop"]
-
-#: A depth map file larger than this is refused before it is read.
-MAX_DEPTH_BYTES = 1 << 30
-
-
-def read_depth(setup: PhotoSetup, width: int, height: int) -> np.ndarray:
-    """The photo's metric depth (H x W float32, +inf where unknown) from its calibration's
-    ``depth``: an image (EXR, PFM, PNG) or a numpy .npy / .npz file, of depth x scale or of
-    disparity (depth = baseline x focal / (disparity + doffs): Middlebury's convention)."""
-    d = setup.depth
-    path = d["file"]
-    if os.path.getsize(path) > MAX_DEPTH_BYTES:
-        raise SynthgenError(f"{path}: a depth map larger than {MAX_DEPTH_BYTES} bytes")
-    if path.lower().endswith((".npy", ".npz")):
-        try:
-            a = np.load(path, allow_pickle=False)
-            if isinstance(a, np.lib.npyio.NpzFile):
-                with a:
-                    if not a.files:
-                        raise SynthgenError(f"{path}: the .npz file holds no array")
-                    a = a[a.files[0]]
-        except (OSError, ValueError) as e:
-            raise SynthgenError(f"{path}: cannot read the depth map ({e})") from None
-        a = np.asarray(a)
-        if a.dtype.kind not in "fiu":
-            raise SynthgenError(f"{path}: the depth map holds {a.dtype} values, not numbers")
-        a = a.astype(np.float32)
-    else:
-        from .._core import read_image
-
-        a = read_image(path, "linear", finite=False)
-    if a.ndim == 3:
-        a = a[:, :, 0]
-    if a.shape != (height, width):
-        raise SynthgenError(f"{path}: the depth map is {a.shape[1] if a.ndim == 2 else '?'} x {a.shape[0]}, the "
-                            f"photo {width} x {height}")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        if d["kind"] == "disparity":
-            focal = d.get("focal") or setup.calibration.fx
-            z = float(d["baseline"]) * float(focal) / (a + float(d["doffs"]))
-        else:
-            z = a * float(d["scale"])
-    return np.where(np.isfinite(z) & (z > 0), z, np.inf).astype(np.float32)
-
 
 def occluder_mask(setup: PhotoSetup, photo: Photo) -> np.ndarray:
     """The photo's occluder mask (H x W bool: real things in front of every inserted object)."""

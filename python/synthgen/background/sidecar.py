@@ -24,7 +24,8 @@ from .calibration import (Calibration, fov_to_focal, ground_from_horizon, ground
 from .formats import focal_from_exif, read_cityscapes_camera, read_kitti_calib
 from .labels import LABEL_FORMATS, RealObject, box_of, read_labels
 
-__all__ = ["CALIBRATION_SCHEMA", "PhotoSetup", "find_calibration_files", "read_photo_setup", "FOLDER_FILE"]
+__all__ = ["CALIBRATION_SCHEMA", "PhotoSetup", "find_calibration_files", "read_photo_setup", "read_depth",
+           "FOLDER_FILE"]
 
 #: The calibration file of every photo of a folder.
 FOLDER_FILE = "calibration.yaml"
@@ -188,6 +189,50 @@ class PhotoSetup:
                                                       "source": self.sun_source},
                 "licence": self.licence, "source": self.source, "labelled": self.labelled,
                 "calibration_files": list(self.files)}
+
+
+#: A depth map file larger than this is refused before it is read.
+MAX_DEPTH_BYTES = 1 << 30
+
+
+def read_depth(setup: PhotoSetup, width: int, height: int) -> np.ndarray:
+    """The photo's metric depth (H x W float32, +inf where unknown) from its calibration's
+    ``depth``: an image (EXR, PFM, PNG) or a numpy .npy / .npz file, of depth x scale or of
+    disparity (depth = baseline x focal / (disparity + doffs): Middlebury's convention)."""
+    d = setup.depth
+    path = d["file"]
+    if os.path.getsize(path) > MAX_DEPTH_BYTES:
+        raise SynthgenError(f"{path}: a depth map larger than {MAX_DEPTH_BYTES} bytes")
+    if path.lower().endswith((".npy", ".npz")):
+        try:
+            a = np.load(path, allow_pickle=False)
+            if isinstance(a, np.lib.npyio.NpzFile):
+                with a:
+                    if not a.files:
+                        raise SynthgenError(f"{path}: the .npz file holds no array")
+                    a = a[a.files[0]]
+        except (OSError, ValueError) as e:
+            raise SynthgenError(f"{path}: cannot read the depth map ({e})") from None
+        a = np.asarray(a)
+        if a.dtype.kind not in "fiu":
+            raise SynthgenError(f"{path}: the depth map holds {a.dtype} values, not numbers")
+        a = a.astype(np.float32)
+    else:
+        from .._core import read_image
+
+        a = read_image(path, "linear", finite=False)
+    if a.ndim == 3:
+        a = a[:, :, 0]
+    if a.shape != (height, width):
+        raise SynthgenError(f"{path}: the depth map is {a.shape[1] if a.ndim == 2 else '?'} x {a.shape[0]}, the "
+                            f"photo {width} x {height}")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if d["kind"] == "disparity":
+            focal = d.get("focal") or setup.calibration.fx
+            z = float(d["baseline"]) * float(focal) / (a + float(d["doffs"]))
+        else:
+            z = a * float(d["scale"])
+    return np.where(np.isfinite(z) & (z > 0), z, np.inf).astype(np.float32)
 
 
 def fit_ground_plane(depth: np.ndarray, k: Dict[str, float], regions: List[np.ndarray],
@@ -397,8 +442,6 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
         probe = PhotoSetup(photo=photo, calibration=Calibration(width=int(width), height=int(height), fx=float(k["fx"]),
                                                                 fy=float(k["fy"]), cx=float(k["cx"]), cy=float(k["cy"]),
                                                                 camera_height=1.0), depth=d)
-        from .photoset import read_depth
-
         z = read_depth(probe, int(width), int(height))
         try:
             normal, offset, inliers = fit_ground_plane(z, k, list(r.get("region") or []))

@@ -125,7 +125,7 @@ def embree_cbox_scene(light: str = "point") -> Tuple[Any, np.ndarray]:
     colours (Kd), the .ecs point light (or, with ``light="area"``, the box's luminaire quad as
     an area light of the same power) and the camera's world_from_camera (-vp 278 273 -800
     -vi 278 273 0 -vu 0 1 0; -fov 37 is vertical). Returns (uncommitted scene, world_from_camera)."""
-    import synthgen as sg
+    from .. import _core as sg
 
     scene = sg.Scene()
     imported = scene.load_mesh_file(f"{EMBREE_MODELS}/cornell_box.obj")
@@ -150,7 +150,7 @@ def synthgen_embree_cbox(width: int, height: int, spp: int, seed: int, threads: 
                          **settings: Any) -> Tuple[np.ndarray, dict]:
     """Renders Embree's Cornell box with synthgen in this process (max_depth =
     EMBREE_PATH_LENGTH + 1); returns (rgb, timings as :func:`synthgen.bench.scenes.synthgen_render`)."""
-    import synthgen as sg
+    from .. import _core as sg
 
     t0 = time.perf_counter()
     scene, wfc = embree_cbox_scene("point")

@@ -24,7 +24,7 @@ CBOX_DIR = os.path.abspath(os.path.join(REPO, "..", "shared", "assets", "ignis-c
 
 
 def _sg():
-    import synthgen as sg  # imported lazily: --help and the Blender checks need no native module
+    from .. import _core as sg  # imported lazily: --help and the Blender checks need no native module
 
     return sg
 
@@ -124,7 +124,7 @@ def _ggx_roughness_to_blender(r: float) -> float:
 
 def spec_materials(width: int, height: int, hdr: str = "courtyard.exr") -> dict:
     sg = _sg()
-    from synthgen import primitives as P
+    from ..scene import primitives as P
 
     plugins = available_plugins()
     notes = []
@@ -204,7 +204,7 @@ def envmap_blender_mapping(rotation_deg: float = 0.0, up=(0.0, 1.0, 0.0)) -> np.
 
 def spec_sunlit(width: int, height: int) -> dict:
     sg = _sg()
-    from synthgen import primitives as P
+    from ..scene import primitives as P
 
     meshes = [_mesh_entry("ground", P.plane(30.0, 30.0)), _mesh_entry("box", P.box()),
               _mesh_entry("sphere", P.uv_sphere(1.0, 96, 48))]

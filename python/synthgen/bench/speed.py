@@ -261,7 +261,7 @@ class SceneRunner:
     # -- converged references, rendered once and cached
 
     def reference(self, renderer: str) -> np.ndarray:
-        from .. import __version__
+        from .._core import __version__
         from ..outputs.files import write_exr
 
         o = self.o

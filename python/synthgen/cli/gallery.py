@@ -21,7 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..scene import gallery
+    from ..frame import gallery
 
     os.makedirs(os.path.dirname(os.path.abspath(args.output)), exist_ok=True)
     print(gallery.write_gallery(args.output, spp=args.spp))

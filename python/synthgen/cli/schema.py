@@ -16,9 +16,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..schema.reference import format_scenario_schema, format_schema
+    from ..schema.reference import format_schema
 
     if getattr(args, "scenario", False):
+        from ..scenario.schema import format_scenario_schema
+
         print(format_scenario_schema())
     elif getattr(args, "calibration", False):
         from ..background.sidecar import CALIBRATION_SCHEMA

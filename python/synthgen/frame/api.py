@@ -16,7 +16,7 @@ from typing import Any, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .data import FrameData
+from ..outputs.data import FrameData
 
 __all__ = ["Scenario"]
 

@@ -21,7 +21,7 @@ from .._core import PinholeCamera, Scene
 from ..scene import primitives as P
 from .records import PlacedObject
 
-__all__ = ["TRUNCATION_PAD", "FrameView", "Layout", "search_layout", "amodal_pixels", "amodal_masks",
+__all__ = ["TRUNCATION_PAD", "FrameView", "Layout", "search_layout", "tilted", "amodal_pixels", "amodal_masks",
            "bit_counts", "bit_mask"]
 
 #: Objects may extend this far beyond the image on each side (fraction of the image size)
@@ -83,6 +83,26 @@ class Layout:
 Spot = Tuple[float, float, float]
 
 
+def tilted(local: np.ndarray, dims: np.ndarray, roll: float, pitch: float) -> Tuple[np.ndarray, float]:
+    """(local, footprint radius) of an object (forward +x, up +y, its box of ``dims`` standing
+    on y = 0) tilted by ``roll`` about its forward axis and ``pitch`` about its lateral axis
+    (positive: front up), about the box's centre, then lowered until its lowest box corner
+    touches y = 0 (it rests on an edge or a corner, as a dropped box would)."""
+    r = P.rotate([0.0, 0.0, 1.0], float(pitch)) @ P.rotate([1.0, 0.0, 0.0], float(roll))
+    r = r.astype(np.float64)
+    half = 0.5 * np.asarray(dims, np.float64)
+    centre = np.array([0.0, half[1], 0.0])
+    corners = np.array([[sx * half[0], sy * half[1], sz * half[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    turned = corners @ r[:3, :3].T
+    lift = np.eye(4)
+    lift[1, 3] = -turned[:, 1].min()
+    shift = np.eye(4)
+    shift[:3, 3] = -centre
+    m = lift @ r @ shift @ local
+    radius = float(np.hypot(turned[:, 0], turned[:, 2]).max())
+    return m, radius
+
+
 def _corners(o: PlacedObject) -> np.ndarray:
     """The 8 corners of an object's box after its local transform (scale, lift, tilt)."""
     half = 0.5 * np.asarray(o.dims, np.float64)
@@ -95,8 +115,6 @@ def _corners(o: PlacedObject) -> np.ndarray:
     # compare the local with the untilted box via the tilt alone (roll/pitch about the centre).
     if not (o.spec.roll or o.spec.pitch):
         return box[:, :3]
-    from .renderer import tilted
-
     m, _ = tilted(np.eye(4), o.dims, o.spec.roll, o.spec.pitch)
     return (box @ m.T)[:, :3]
 

@@ -25,12 +25,13 @@ from ..outputs.render import camera_meta
 from ..scenario import Scenario, frame_rng, sample_frame
 from ..scenario.sample import FrameSpec, ObjectSpec, PluginSpec
 from ..scenario.schema import RENDER_KEYS
+from ..schema.plugins import realize
 from ..scene import primitives as P
 from ..scene.vehicles import AXES, model_axes
-from .layout import FrameView, search_layout
+from .layout import FrameView, search_layout, tilted
 from .lod import amodal_and_levels
 from .records import PlacedObject, frame_camera, level_frame, object_records, weather_labels
-from .resources import FrameLibrary, Pool, Shape, Shapes, realize
+from .resources import FrameLibrary, Pool, Shape, Shapes
 
 __all__ = ["FrameRenderer", "FrameSetup", "light_plugin"]
 
@@ -54,26 +55,6 @@ def orientation(forward: str, up: str) -> Optional[np.ndarray]:
         return model_axes(forward, up)
     except ValueError:
         raise SynthgenError(f"a model's forward ({forward}) and up ({up}) must be different axes") from None
-
-
-def tilted(local: np.ndarray, dims: np.ndarray, roll: float, pitch: float) -> Tuple[np.ndarray, float]:
-    """(local, footprint radius) of an object (forward +x, up +y, its box of ``dims`` standing
-    on y = 0) tilted by ``roll`` about its forward axis and ``pitch`` about its lateral axis
-    (positive: front up), about the box's centre, then lowered until its lowest box corner
-    touches y = 0 (it rests on an edge or a corner, as a dropped box would)."""
-    r = P.rotate([0.0, 0.0, 1.0], float(pitch)) @ P.rotate([1.0, 0.0, 0.0], float(roll))
-    r = r.astype(np.float64)
-    half = 0.5 * np.asarray(dims, np.float64)
-    centre = np.array([0.0, half[1], 0.0])
-    corners = np.array([[sx * half[0], sy * half[1], sz * half[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    turned = corners @ r[:3, :3].T
-    lift = np.eye(4)
-    lift[1, 3] = -turned[:, 1].min()
-    shift = np.eye(4)
-    shift[:3, 3] = -centre
-    m = lift @ r @ shift @ local
-    radius = float(np.hypot(turned[:, 0], turned[:, 2]).max())
-    return m, radius
 
 
 @dataclasses.dataclass

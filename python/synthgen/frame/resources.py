@@ -294,20 +294,3 @@ class Pool:
     def beyond(self, n: int) -> List[int]:
         """The ids of slots n and above (unused this frame)."""
         return self.ids[n:]
-
-
-def realize(library: Any, params: Mapping[str, Any]) -> Dict[str, Any]:
-    """Plugin parameters for the core, with every inline texture of a scenario
-    (:class:`synthgen.schema.plugins.TextureSpec`, nested ones too) created in ``library`` and
-    replaced by its :class:`TextureRef`."""
-    from .._core import TextureRef
-    from ..schema.plugins import TextureSpec, given_params
-
-    out: Dict[str, Any] = {}
-    for k, v in params.items():
-        if isinstance(v, TextureSpec):
-            rec = v["texture"]
-            out[k] = TextureRef(library.add_texture(str(rec["type"]), realize(library, given_params(rec))))
-        else:
-            out[k] = v
-    return out

@@ -23,7 +23,8 @@ rgb_exr), ``depth`` (depth, depth16), ``masks`` (instance, semantic), ``surface`
 albedo), ``coco``, ``yolo``, ``kitti``, ``meta``. Adding a format is one module here (found by :func:`discover`) plus its
 test. Infrastructure: :mod:`.registry`, :mod:`.files` (atomic writers), :mod:`.render` (the
 files of ``synthgen render``), :mod:`.verify` (``synthgen verify``), :mod:`.split` (the split),
-:mod:`.read` (:func:`synthgen.read_dataset`: a dataset back as arrays and labels).
+:mod:`.read` (:func:`synthgen.read_dataset`: a dataset back as arrays and labels), :mod:`.data`
+(:class:`synthgen.FrameData`: one frame as arrays and labels, read back or rendered in memory).
 """
 from __future__ import annotations
 
@@ -35,7 +36,7 @@ from .registry import (Frame, OutputKind, default_outputs, finalize_dataset, fra
                        kind_names, kinds, register, write_frame)
 
 #: Modules of this package that are not output formats.
-INFRASTRUCTURE = ("registry", "files", "render", "verify", "split", "read", "inspect")
+INFRASTRUCTURE = ("registry", "files", "render", "verify", "split", "read", "data", "inspect")
 
 
 def format_modules() -> List[str]:

@@ -19,7 +19,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence
 import numpy as np
 
 from .._core import SynthgenError
-from ..frame.data import FrameData
+from .data import FrameData
 from .meta import frame_status, read_meta
 from .registry import frame_name
 from .split import SPLITS, read_splits

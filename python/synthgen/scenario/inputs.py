@@ -15,7 +15,7 @@ from .._core import Scene, SynthgenError
 from ..schema import distributions as D
 from ..schema.errors import Loc, SceneFileError, ValidationContext
 from ..schema.fields import InputPath, Validated
-from ..schema.plugins import given_params
+from ..schema.plugins import given_params, realize
 from .load import Scenario
 
 __all__ = ["check_inputs"]
@@ -97,8 +97,6 @@ class _Checker:
         for option in _options(rec):
             if not isinstance(option, Validated) or not _constant(option):
                 continue
-            from ..frame.resources import realize  # (synthgen.frame imports this package)
-
             try:  # inline textures are created here: their errors are this plugin's
                 params = realize(self.scene, given_params(option))
             except SynthgenError as e:

@@ -1,33 +1,27 @@
 """Sampling one frame of a scenario: a pure function of (scenario, frame index) into typed
 records.
 
-:func:`frame_rng` is the only source of randomness: a generator seeded by (scenario seed,
-frame, stream) through numpy's SeedSequence. :func:`sample_frame` walks the validated tree in
-a fixed order (:func:`synthgen.schema.distributions.sample_tree`), records every draw under
-its key path and returns a :class:`FrameSpec`: the camera, lights (plugin name and given
-parameters), ground and one :class:`ObjectSpec` per object instance.
+:func:`frame_rng` (:mod:`synthgen.schema.distributions`) is the only source of randomness: a
+generator seeded by (scenario seed, frame, stream) through numpy's SeedSequence.
+:func:`sample_frame` walks the validated tree in a fixed order
+(:func:`synthgen.schema.distributions.sample_tree`), records every draw under its key path and
+returns a :class:`FrameSpec`: the camera, lights (plugin name and given parameters), ground and
+one :class:`ObjectSpec` per object instance.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Mapping, Optional, Tuple
 
-import numpy as np
-
 from .. import randomize
 from ..randomize.weather import sample as sample_weather
 from ..schema import distributions as D
+from ..schema.distributions import frame_rng
 from ..schema.plugins import given_params
 from .load import Scenario, support_of
 from .schema import SHAPE_KEYS
 
 __all__ = ["frame_rng", "sample_frame", "FrameSpec", "ObjectSpec", "PluginSpec", "CameraSpec", "GroundSpec"]
-
-
-def frame_rng(seed: int, frame: int, stream: int = 0) -> np.random.Generator:
-    """The generator of frame ``frame``: a pure function of (scenario seed, frame index,
-    stream) through numpy's SeedSequence (PCG64)."""
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([int(seed), int(frame), int(stream)])))
 
 
 @dataclass

@@ -6,7 +6,7 @@ Materials, lights and the camera intrinsics come from the plugins' C++ declarati
 (:func:`synthgen.schema.plugins.plugin_record`, scenario form: no texture or material
 references); object randomizers (``sign``, ``plate``, ``wear``, ``decals``) from
 :mod:`synthgen.randomize`; the output kinds from :mod:`synthgen.outputs`. ``synthgen schema
---scenario`` prints the whole format.
+--scenario`` prints the whole format (:func:`format_scenario_schema`).
 """
 from __future__ import annotations
 
@@ -18,12 +18,13 @@ from ..randomize import weather
 from ..schema.errors import Loc, ValidationContext, show_value
 from ..schema.fields import (EMPTY, REQUIRED, Bool, Choice, Field, FilePath, Integer, ListOf, Number, Record, String,
                              Vector)
-from ..schema.plugins import plugin_record, settings_record
+from ..schema.plugins import plugin_record, scenario_texture_record, settings_record
 from ..scene.assets import AXES
 from ..schema.random import R, randomized
+from ..schema.reference import format_schema
 
 __all__ = ["SCENARIO_SCHEMA", "BACKGROUND", "MATERIAL", "LIGHT", "CAMERA", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS",
-           "SHAPE_KEYS", "POST_STEP"]
+           "SHAPE_KEYS", "POST_STEP", "format_scenario_schema"]
 
 #: A material: any material plugin but those made of other materials (``mix``).
 MATERIAL = randomized(plugin_record("material", scenario=True, doc="a material (synthgen plugin name and "
@@ -246,3 +247,10 @@ SCENARIO_SCHEMA = Record(
      "post": ListOf(POST_STEP, [], doc="image-space steps applied to each frame's image, in order"),
      "background": BACKGROUND},
     doc="a scenario")
+
+
+def format_scenario_schema() -> str:
+    """The scenario reference: every key of a scenario, then the inline texture form that
+    texture parameters take (``{texture: {type: NAME, ...}}``)."""
+    return (format_schema(SCENARIO_SCHEMA) + "\n\n# An inline texture, {texture: <this>}, wherever a parameter "
+            "takes a texture:\n" + format_schema(scenario_texture_record()))

@@ -7,7 +7,6 @@
 - :mod:`.plates`, :mod:`.signs`, :mod:`.raster` -- generated licence plates and road-sign
   pictograms (a small SDF rasterizer and text);
 - :mod:`.assets` -- the asset manifest (ids, sources, licences, checksums) and its cache;
-- :mod:`.gallery` -- the wear gallery (``synthgen gallery``);
 - :mod:`.extensions` -- user extensions in C (compiled, cached, loaded on consent); :mod:`.wear_ext` -- the
   rust preset on the example extension.
 """

@@ -16,7 +16,8 @@ Bounds and options are validated like the constant they stand for (type and allo
 so a typo or an out-of-range bound is reported before anything renders.
 
 Sampling is explicit: every distribution draws from the ``numpy.random.Generator`` passed to
-:meth:`Distribution.sample`; there is no global random state.
+:meth:`Distribution.sample`; there is no global random state. A frame's generators come from
+:func:`frame_rng` (scenario seed, frame index, stream).
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import numpy as np
 
 __all__ = ["Distribution", "Broadcast", "Uniform", "Normal", "LogUniform", "IntUniform", "Choice", "HsvJitter", "DIST_KEYS",
-           "is_distribution_spec"]
+           "is_distribution_spec", "frame_rng"]
 
 #: The keys that mark a mapping as a distribution.
 DIST_KEYS = ("uniform", "normal", "loguniform", "int", "choice", "hsv")
@@ -225,6 +226,12 @@ def _plain(x: Any) -> Any:
 def plain(x: Any) -> Any:
     """Public alias of the JSON conversion used for metadata."""
     return _plain(x)
+
+
+def frame_rng(seed: int, frame: int, stream: int = 0) -> np.random.Generator:
+    """The generator of frame ``frame``: a pure function of (scenario seed, frame index,
+    stream) through numpy's SeedSequence (PCG64)."""
+    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([int(seed), int(frame), int(stream)])))
 
 
 def sample_tree(tree: Any, rng: np.random.Generator, path: str = "", record: Optional[Dict[str, Any]] = None) -> Any:

@@ -29,7 +29,7 @@ from .fields import (REQUIRED, Bool, Choice, ColorOrTexture, Field, FilePath, In
                      NumberList, Record, ScalarOrTexture, String, TextureRefField, Vector)
 
 __all__ = ["plugin_info", "plugin_names", "param_field", "plugin_record", "refresh_runtime_plugins",
-           "settings_record", "given_params", "REFERENCE_TYPES"]
+           "settings_record", "given_params", "realize", "REFERENCE_TYPES"]
 
 #: Parameter types that refer to other library objects (in scenarios textures are written
 #: inline, materials have no form).
@@ -268,4 +268,20 @@ def given_params(rec: Mapping[str, Any], skip: Sequence[str] = ("type", "name"))
         if isinstance(v, tuple) and v and isinstance(v[0], tuple):
             v = [x for row in v for x in row]
         out[k] = list(v) if isinstance(v, tuple) else v
+    return out
+
+
+def realize(library: Any, params: Mapping[str, Any]) -> Dict[str, Any]:
+    """Plugin parameters for the core, with every inline texture of a scenario
+    (:class:`TextureSpec`, nested ones too) created in ``library`` and replaced by its
+    :class:`TextureRef`."""
+    from .._core import TextureRef
+
+    out: Dict[str, Any] = {}
+    for k, v in params.items():
+        if isinstance(v, TextureSpec):
+            rec = v["texture"]
+            out[k] = TextureRef(library.add_texture(str(rec["type"]), realize(library, given_params(rec))))
+        else:
+            out[k] = v
     return out

@@ -68,13 +68,3 @@ def _fmt_default(d: Any) -> str:
     if isinstance(d, (dict, list)) and not d:
         return "{}" if isinstance(d, dict) else "[]"
     return str(d)
-
-
-def format_scenario_schema() -> str:
-    """The scenario reference: every key of a scenario, then the inline texture form that
-    texture parameters take (``{texture: {type: NAME, ...}}``)."""
-    from ..scenario import SCENARIO_SCHEMA
-    from .plugins import scenario_texture_record
-
-    return (format_schema(SCENARIO_SCHEMA) + "\n\n# An inline texture, {texture: <this>}, wherever a parameter "
-            "takes a texture:\n" + format_schema(scenario_texture_record()))

@@ -160,7 +160,7 @@ def schema() -> Record:
 def sample(w: Mapping[str, Any], seed: int, frame: int, rec: Dict[str, Any]) -> List[Tuple[str, Dict[str, Any]]]:
     """The frame's conditions [(key, parameters)], at most one per group, in GROUPS' order."""
     from ...schema import distributions as D
-    from ...scenario.sample import frame_rng
+    from ...schema.distributions import frame_rng
 
     out: List[Tuple[str, Dict[str, Any]]] = []
     for group, stream in GROUPS.items():

@@ -37,7 +37,7 @@ class FrameData:
     @property
     def image(self) -> np.ndarray:
         """H x W x 3 uint8 sRGB encoding of ``rgb`` (what images/NNNNNN.png holds)."""
-        from ..outputs.files import to_srgb8
+        from .files import to_srgb8
 
         if self.rgb is None:
             raise ValueError(f"frame {self.index} has no image")

@@ -11,8 +11,12 @@ from typing import Any, Dict, List, Tuple
 
 import numpy as np
 
-from . import plates, primitives as P, raster as R, signs, wear
 from .._core import PinholeCamera, Scene, TextureRef
+from ..outputs.files import write_srgb_png
+from ..scenario import check_inputs, load_scenario
+from ..scene import plates, primitives as P, raster as R, signs, vehicles, wear
+from .renderer import FrameRenderer
+from .resources import Shapes
 
 __all__ = ["EFFECTS", "OBJECTS", "CAR", "CAR_EFFECTS", "WEATHER_TILES", "render_gallery", "render_car_row",
            "render_weather_row"]
@@ -141,9 +145,6 @@ CAR_EFFECTS: List[Tuple[str, Dict[str, Any]]] = [
 def _car_tile(effect: str, params: Dict[str, Any], w: int, h: int, spp: int) -> np.ndarray:
     """The library car (its own materials, a silver paint, a plate) with one effect, seen as in a
     dataset: from a driver's height, the car about a third of the image's width."""
-    from ..frame.resources import Shapes
-    from . import vehicles
-
     s = Scene()
     ground = P.ground()
     s.add_instance(s.add_mesh(ground["positions"], ground["indices"], normals=ground["normals"]), np.eye(4),
@@ -209,9 +210,6 @@ def render_weather_row(scenario: str, frame: int = 0, tile_w: int = 320, tile_h:
     """The weather row (linear RGB): frame ``frame`` of ``scenario`` (its layout, camera and
     objects) with its weather section replaced by each of :data:`WEATHER_TILES` in turn
     (denoised, as scenarios/weather.yaml renders), a caption under each tile."""
-    from ..frame.renderer import FrameRenderer
-    from ..scenario import check_inputs, load_scenario
-
     row = []
     for name, weather in (tiles or WEATHER_TILES):
         sc = load_scenario(scenario, overrides=[("weather", weather), ("resolution", [tile_w, tile_h]),
@@ -236,18 +234,12 @@ def _short(v: Any) -> str:
 
 
 def write_weather_row(path: str, scenario: str, **kw: Any) -> str:
-    from ..outputs.files import write_srgb_png
-
     return write_srgb_png(path, render_weather_row(scenario, **kw))
 
 
 def write_gallery(path: str, **kw: Any) -> str:
-    from ..outputs.files import write_srgb_png
-
     return write_srgb_png(path, render_gallery(**kw))
 
 
 def write_car_row(path: str, **kw: Any) -> str:
-    from ..outputs.files import write_srgb_png
-
     return write_srgb_png(path, render_car_row(**kw))
