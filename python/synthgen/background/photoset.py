@@ -22,6 +22,7 @@ from .sidecar import PhotoSetup, find_calibration_files, read_depth, read_photo_
 
 __all__ = ["PhotoSet", "FramePhoto", "resize_linear", "read_depth", "nearest_crop"]
 
+
 def occluder_mask(setup: PhotoSetup, photo: Photo) -> np.ndarray:
     """The photo's occluder mask (H x W bool: real things in front of every inserted object)."""
     from .._core import read_image
