@@ -273,11 +273,11 @@ def test_label_errors_name_the_calibration_file_that_lists_them(tmp_path, capsys
         read_photo_setup(photo, 320, 180)
     (tmp_path / "road.json").write_text("{}")
     assert cli.main(["calibrate", photo, "-o", str(tmp_path / "p.png")]) == 2
-    assert capsys.readouterr().err == (f"synthgen: error: {cal}:3:9: labels[0].file: {tmp_path}/road.json: not a "
+    assert capsys.readouterr().err == (f"synthgen: error: {cal}:3:10: labels[0].file: {tmp_path}/road.json: not a "
                                        "labelme file (no 'shapes' list)\n")
     cal.write_text(base + "objects:\n  - {class: car, box: [10, 90, 60, 130]}\n"
                           "  - {class: car, box: [10, 90, 10, 130]}\n")
-    with pytest.raises(SceneFileError, match=rf"^{at}:4:3: objects\[1\]: {empty}"):
+    with pytest.raises(SceneFileError, match=rf"^{at}:5:5: objects\[1\]: {empty}"):
         read_photo_setup(photo, 320, 180)
     assert not (tmp_path / "p.png").exists()
 

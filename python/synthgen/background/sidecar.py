@@ -287,6 +287,7 @@ class _Reader:
     def __init__(self, photo: str, files: Sequence[str]):
         self.photo = photo
         self.values: Dict[str, Tuple[Any, ValidationContext, Loc]] = {}
+        self.raw: Dict[str, Any] = {}   #: each key's YAML value (its items' positions)
         for f in files:
             data = read_yaml(f)
             if data is None:
@@ -296,6 +297,7 @@ class _Reader:
             v = CALIBRATION_SCHEMA.validate(data, Loc.root(data), ctx)
             for k in v.given:
                 self.values[k] = (v[k], ctx, v.locs[k])
+                self.raw[k] = data.get(k)
 
     def get(self, key: str) -> Any:
         return self.values[key][0] if key in self.values else None
@@ -309,8 +311,13 @@ class _Reader:
     def loc(self, key: str, sub: Optional[str] = None) -> Tuple[ValidationContext, Loc]:
         """The file (its context) and location of ``key`` (``sub``: a path below it, ``[0].file``)."""
         _, ctx, loc = self.values[key]
-        if sub:
-            loc = Loc(f"{loc.path}{sub}" if sub.startswith("[") else f"{loc.path}.{sub}", loc.line, loc.column)
+        if sub and sub.startswith("["):  # an item: its own line where the YAML marks it
+            i, rest = sub[1:].split("]", 1)
+            marks = getattr(self.raw.get(key), "item_marks", None) or []
+            line, column = marks[int(i)] if int(i) < len(marks) and marks[int(i)] else (loc.line, loc.column)
+            loc = Loc(f"{loc.path}[{i}]{rest}", line, column)
+        elif sub:
+            loc = Loc(f"{loc.path}.{sub}", loc.line, loc.column)
         return ctx, loc
 
     def path(self, key: str, value: str, sub: Optional[str] = None) -> str:
