@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 
 import numpy as np
 import OpenImageIO as oiio
@@ -252,6 +253,33 @@ def test_sidecar_and_folder_files(tmp_path):
     (tmp_path / "road.yaml").write_text("ground: {camera_height: 1.2, pitch: 2}\n")
     with pytest.raises(sg.SynthgenError, match="two calibration sidecars"):
         read_photo_setup(photo, 320, 180)
+
+
+def test_label_errors_name_the_calibration_file_that_lists_them(tmp_path, capsys):
+    """An error in a label file (or in a real object the calibration itself lists) names the
+    calibration file, line and key that brought it in, then the label file's own place: the
+    user of `synthgen calibrate` sees which calibration to fix."""
+    from synthgen import cli
+
+    photo = _photo(tmp_path)
+    base = "intrinsics: {fov_x: 60}\nground: {camera_height: 1.4, horizon: 80}\n"
+    cal = tmp_path / "road.png.yaml"
+    cal.write_text(base + "labels: [{file: road.json, format: labelme}]\n")
+    (tmp_path / "road.json").write_text(json.dumps({"shapes": [{"label": "car", "points": [[10, 90], [10, 130]],
+                                                                 "shape_type": "rectangle"}]}))
+    at, empty = re.escape(str(cal)), r"an empty box \[10\.0, 90\.0, 10\.0, 130\.0\]$"
+    with pytest.raises(SceneFileError, match=rf"^{at}:3:\d+: labels\[0\]\.file: {re.escape(str(tmp_path))}/road\.json: "
+                                             rf"shapes\[0\]: {empty}"):
+        read_photo_setup(photo, 320, 180)
+    (tmp_path / "road.json").write_text("{}")
+    assert cli.main(["calibrate", photo, "-o", str(tmp_path / "p.png")]) == 2
+    assert capsys.readouterr().err == (f"synthgen: error: {cal}:3:10: labels[0].file: {tmp_path}/road.json: not a "
+                                       "labelme file (no 'shapes' list)\n")
+    cal.write_text(base + "objects:\n  - {class: car, box: [10, 90, 60, 130]}\n"
+                          "  - {class: car, box: [10, 90, 10, 130]}\n")
+    with pytest.raises(SceneFileError, match=rf"^{at}:5:5: objects\[1\]: {empty}"):
+        read_photo_setup(photo, 320, 180)
+    assert not (tmp_path / "p.png").exists()
 
 
 def test_a_calibration_without_ground_or_intrinsics_is_refused(tmp_path):

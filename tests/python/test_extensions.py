@@ -338,6 +338,29 @@ def test_a_broken_extension_in_a_scene_file_points_at_its_entry(tmp_path):
         sg.load_scene(str(f), allow_extensions=True)
 
 
+def test_the_command_line_prints_compiler_errors_line_by_line(tmp_path, capsys):
+    """The compiler's diagnostics reach the user as it printed them, one per line, each starting
+    with FILE:LINE:COLUMN (they were joined onto one line after 'synthgen: error:')."""
+    from synthgen import cli
+
+    bad = _write(tmp_path, "two_errors.c", """\
+        static float f(float x) {
+          float y = x * undefined_scale;
+          return y
+        }
+        """)
+    f = tmp_path / "scene.yaml"
+    f.write_text(SCENE.format(allow="allow_extensions: true", path=bad))
+    assert cli.main(["render", str(f), "-o", str(tmp_path / "out"), "--allow-extensions"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0].startswith(f"synthgen: error: {f}:4:")
+    assert "two_errors.c: the extension does not compile" in lines[0]
+    errors = [ln for ln in lines if ln.startswith(f"{bad}:") and ": error: " in ln]
+    assert [ln.split(":")[1] for ln in errors] == ["4", "5"], lines  # the file's lines 4 and 5 (after HEADER)
+    assert "undefined_scale" in errors[0] and "undefined_scale" not in errors[1]
+    assert not (tmp_path / "out").exists()
+
+
 CRASH_C = """
 #include <stdint.h>
 static const sg_ext_param params[] = {

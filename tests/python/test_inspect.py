@@ -45,3 +45,47 @@ def test_inspect_a_dataset(tmp_path):
         c = np.round(np.array(matplotlib.colormaps["tab10"](class_id - 1)[:3]) * 255)
         assert (np.abs(sheet[..., :3].astype(int) - c).max(axis=-1) <= 2).sum() > 8, class_id
     assert (tmp_path / "ds" / "inspect" / "statistics.png").stat().st_size > 10000
+
+
+PHOTO_SCENARIO = """seed: 3
+count: 2
+resolution: [96, 64]
+background: {photos: [photos/street.exr], ground_albedo: 0.2}
+objects:
+  - {class: box, primitive: box, size: [1.6, 1.2, 1.6], count: 1, material: {type: diffuse, albedo: 0.6}}
+render: {spp: 1, max_depth: 2}
+outputs: [rgb, instance, semantic, coco, yolo, kitti]
+"""
+
+
+def test_inspect_and_verify_count_the_same_objects_in_photos(tmp_path, capsys):
+    """Over a photo, a frame's labels are the inserted objects and the photo's real ones
+    (source: real): `inspect` counted only the inserted ones where `verify` counted both. Both
+    now count and print the same: N objects (I inserted, R real)."""
+    from synthgen.cli import main
+    from synthgen.outputs.verify import verify_dataset
+
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    img = oiio.ImageBuf(oiio.ImageSpec(96, 64, 3, oiio.FLOAT))
+    img.set_pixels(oiio.ROI(), np.full((64, 96, 3), 0.2, np.float32))
+    assert img.write(str(photos / "street.exr"))
+    (photos / "calibration.yaml").write_text(
+        "intrinsics: {fx: 85, cx: 48, cy: 30}\nground: {camera_height: 1.6, pitch: 6}\nsun: {overcast: true}\n"
+        "objects:\n  - {class: box, box: [4, 40, 20, 52]}\nignore:\n  - {box: [75, 32, 95, 40]}\n")
+    (tmp_path / "s.yaml").write_text(PHOTO_SCENARIO)
+    assert main(["run", str(tmp_path / "s.yaml"), "-o", str(tmp_path / "ds"), "--no-progress"]) == 0
+    st = statistics(read_dataset(tmp_path / "ds"))
+    v = verify_dataset(str(tmp_path / "ds"))
+    coco = json.loads((tmp_path / "ds" / "annotations" / "coco.json").read_text())
+    anns = [a for a in coco["annotations"] if not a["iscrowd"]]
+    assert st["objects"] == v["annotations"] == len(anns)
+    assert st["real"] == v["real"] == sum(a["source"] == "real" for a in anns) == 2  # one per frame
+    assert st["inserted"] == v["inserted"] == sum(a["source"] != "real" for a in anns) == len(anns) - 2 >= 1
+    assert st["per_class"] == {"box": len(anns)} and sum(st["objects_per_frame"]) == len(anns)
+    assert sorted(st["box_heights"]) == sorted(float(a["bbox"][3]) for a in anns)
+    assert main(["inspect", str(tmp_path / "ds"), "-n", "2"]) == 0
+    assert f"2 frames, {len(anns)} labelled visible objects ({st['inserted']} inserted, 2 real;" in \
+        capsys.readouterr().out
+    assert main(["verify", str(tmp_path / "ds")]) == 0
+    assert f"ok: 2 frames, {len(anns)} objects ({st['inserted']} inserted, 2 real);" in capsys.readouterr().out

@@ -3,6 +3,7 @@ bit-identically to the scene that recorded it; a run leaves failed frames' journ
 `synthgen replay` renders again."""
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -77,6 +78,26 @@ def test_replay_renders_bit_identically(tmp_path):
     assert settings["spp"] == 4 and settings["seed"] == 7
     _same(ref, r.render(**settings))
     assert r.instance_count() == s.instance_count()
+
+
+def test_replay_prints_and_records_the_scene_it_replays(tmp_path, capsys):
+    """`synthgen replay` counts the replayed scene's objects and lights (it printed "0 objects,
+    0 lights" for every journal): the instances that render (not hidden ones), the lights."""
+    from synthgen import cli
+
+    s = sg.Scene()
+    s.begin_journal()
+    _edit_a_scene(s)  # 4 instances left, one of them hidden; a sun and a sky
+    s.render(spp=1, seed=3)
+    path = str(tmp_path / "scene.journal")
+    s.save_journal(path)
+    assert cli.main(["replay", path, "-o", str(tmp_path / "r"), "--spp", "1"]) == 0
+    assert f"{path}: 3 objects, 2 lights, 96x64" in capsys.readouterr().out
+    scene = json.loads((tmp_path / "r" / "meta.json").read_text())["scene"]
+    assert scene["objects"] == [i for i in s.instances() if i["visible"]]
+    assert [(o["class_id"], o["instance_id"]) for o in scene["objects"]][1:] == [(1, 2), (3, 33)]
+    assert scene["hidden_instances"] == 1
+    assert [li["type"] for li in scene["lights"]] == ["sun", "sky"]
 
 
 def test_a_journal_begun_mid_life_starts_with_the_scene_as_it_is(tmp_path):

@@ -128,3 +128,35 @@ def test_ground_fog_and_clouds_are_drawn_per_frame_and_labelled(tmp_path):
     c = _run(tmp_path, "clouds", "weather: {clouds: {bottom: 300, top: 600, coverage: 0.7}}", count=1)
     meta = json.load(open(os.path.join(c, "meta", "000000.json")))
     assert list(meta["weather"]) == ["clouds"] and meta["weather"]["clouds"]["bottom"] == 300.0
+
+
+def test_a_fog_layer_below_the_ground_is_refused_or_not_recorded(tmp_path, capsys):
+    """A layer from the ground up to a top at or below the ground holds nothing of the scene: a
+    fixed top (or a distribution whose every draw is) is refused at validate, naming the key; a
+    frame whose drawn top falls there has no fog -- meta.weather null (nothing rendered, no
+    object gets fog labels) and meta.weather_notes says why -- while the other frames of the
+    same distribution have their fog (it was recorded as fog in every frame)."""
+    from synthgen.cli import main
+
+    for top in ("-5", "0", "{uniform: [-9, -1]}"):
+        path = _scenario(tmp_path, "below", f"weather: {{fog: {{visibility: 50, top: {top}}}}}")
+        assert main(["validate", path]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"synthgen: error: {path}:28:") and "weather.fog.top: " in err, err
+        assert "at or below the ground" in err and "give a top above 0 m" in err
+    out = run_tiny(tmp_path, "mixed", "weather: {fog: {visibility: 50, top: {uniform: [-20, 10]}}}", count=6)
+    seen = set()
+    for k in range(6):
+        meta = json.load(open(os.path.join(out, "meta", f"{k:06d}.json")))
+        top = meta["sampled"]["weather.fog.top"]
+        seen.add(top > 0)
+        if top > 0:
+            assert meta["weather"]["fog"]["top"] == top and "weather_notes" not in meta
+            assert all("weather" in o for o in meta["objects"] if o.get("visible_pixels"))
+        else:
+            assert meta["weather"] is None, meta["weather"]
+            assert meta["weather_notes"] == [f"fog: top {top:.3g} m was drawn, at or below the ground (y = 0, where "
+                                             "the objects stand): the layer, from the ground up to top, would hold "
+                                             "nothing of the scene: the frame has no fog"]
+            assert not any("weather" in o for o in meta["objects"])
+    assert seen == {True, False}  # both kinds of frame were drawn

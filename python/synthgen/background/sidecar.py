@@ -332,6 +332,7 @@ class _Reader:
     def __init__(self, photo: str, files: Sequence[str]):
         self.photo = photo
         self.values: Dict[str, Tuple[Any, ValidationContext, Loc]] = {}
+        self.raw: Dict[str, Any] = {}   #: each key's YAML value (its items' positions)
         for f in files:
             data = read_yaml(f)
             if data is None:
@@ -341,6 +342,7 @@ class _Reader:
             v = CALIBRATION_SCHEMA.validate(data, Loc.root(data), ctx)
             for k in v.given:
                 self.values[k] = (v[k], ctx, v.locs[k])
+                self.raw[k] = data.get(k)
 
     def get(self, key: str) -> Any:
         return self.values[key][0] if key in self.values else None
@@ -351,15 +353,32 @@ class _Reader:
             ctx.error(loc, reason)
         raise SynthgenError(f"{self.photo}: {reason}")
 
+    def loc(self, key: str, sub: Optional[str] = None) -> Tuple[ValidationContext, Loc]:
+        """The file (its context) and location of ``key`` (``sub``: a path below it, ``[0].file``)."""
+        _, ctx, loc = self.values[key]
+        if sub and sub.startswith("["):  # an item: its own line where the YAML marks it
+            i, rest = sub[1:].split("]", 1)
+            marks = getattr(self.raw.get(key), "item_marks", None) or []
+            line, column = marks[int(i)] if int(i) < len(marks) and marks[int(i)] else (loc.line, loc.column)
+            loc = Loc(f"{loc.path}[{i}]{rest}", line, column)
+        elif sub:
+            loc = Loc(f"{loc.path}.{sub}", loc.line, loc.column)
+        return ctx, loc
+
     def path(self, key: str, value: str, sub: Optional[str] = None) -> str:
         """A file a calibration names: relative to the calibration file, else to the photo's folder
         (a calibration kept apart from photos fetched into the asset cache names their labels)."""
-        _, ctx, loc = self.values[key]
-        loc = Loc(f"{loc.path}.{sub}" if sub else loc.path, loc.line, loc.column)
+        ctx, loc = self.loc(key, sub)
         beside = os.path.join(os.path.dirname(self.photo), os.path.expanduser(value))
         if not os.path.isabs(value) and not os.path.isfile(os.path.join(ctx.base_dir, value)) and os.path.isfile(beside):
             return os.path.abspath(beside)
         return _path(ctx, value, loc)
+
+
+def _check_box(o: RealObject, where: str = "") -> None:
+    x0, y0, x1, y1 = o.box
+    if not (x1 > x0 and y1 > y0):
+        raise SynthgenError(f"{where + ': ' if where else ''}an empty box {list(o.box)}")
 
 
 def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[str] = None,
@@ -507,22 +526,25 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
         setup.envmap = (r.path("envmap", e["file"], "file"), None if e["rotation"] is None else float(e["rotation"]))
     # -- real labels -----------------------------------------------------------------------------
     objs: List[RealObject] = []
+    # A label file's errors name the calibration file (and key) that lists it, then the label
+    # file's own place: the user sees which calibration brought the file in.
     for i, lab in enumerate(r.get("labels") or []):
         path = r.path("labels", lab["file"], f"[{i}].file")
         setup.files.append(path)
-        objs += read_labels(path, lab["format"], photo, (width, height), lab.get("classes"), lab.get("names"))
-    for i, o in enumerate(r.get("objects") or []):
-        poly = o.get("polygon")
-        box = list(o["box"]) if o.get("box") is not None else box_of(poly)
-        objs.append(RealObject(o["class"], box, poly, False, f"objects[{i}]"))
-    for i, o in enumerate(r.get("ignore") or []):
-        poly = o.get("polygon")
-        box = list(o["box"]) if o.get("box") is not None else box_of(poly)
-        objs.append(RealObject(o["class"], box, poly, True, f"ignore[{i}]"))
-    for o in objs:
-        x0, y0, x1, y1 = o.box
-        if not (x1 > x0 and y1 > y0):
-            raise SynthgenError(f"{o.source}: an empty box {list(o.box)}")
+        ctx, loc = r.loc("labels", f"[{i}].file")
+        with ctx.core(loc):
+            got = read_labels(path, lab["format"], photo, (width, height), lab.get("classes"), lab.get("names"))
+            for o in got:
+                _check_box(o, o.source)
+        objs += got
+    for key, ignore in (("objects", False), ("ignore", True)):
+        for i, o in enumerate(r.get(key) or []):
+            poly = o.get("polygon")
+            box = list(o["box"]) if o.get("box") is not None else box_of(poly)
+            objs.append(RealObject(o["class"], box, poly, ignore, f"{key}[{i}]"))
+            ctx, loc = r.loc(key, f"[{i}]")
+            with ctx.core(loc):
+                _check_box(objs[-1])
     setup.objects = objs
     setup.labelled = any(key in r.values for key in ("labels", "objects"))
     setup.licence = r.get("licence") or ""

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Callable, Dict, List, Optional, Sequence
 
 from .._core import SynthgenError, __version__
-from .common import EXIT_INPUT_ERROR, EXIT_INTERRUPTED, EXIT_OK, debug_option, one_line
+from .common import EXIT_INPUT_ERROR, EXIT_INTERRUPTED, EXIT_OK, debug_option, error_text
 
 __all__ = ["main", "build_parser", "Command", "register", "commands", "EXIT_OK", "EXIT_INPUT_ERROR"]
 
@@ -101,7 +101,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except (SynthgenError, OSError) as e:  # SceneFileError is a SynthgenError
         if debug:
             raise
-        print(f"synthgen: error: {one_line(e)}", file=sys.stderr)
+        print(f"synthgen: error: {error_text(e)}", file=sys.stderr)
         return EXIT_INPUT_ERROR
 
 

@@ -151,9 +151,12 @@ def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str,
     return EXIT_OK
 
 
-def one_line(e: BaseException) -> str:
-    text = str(e).strip() or type(e).__name__
-    return " ".join(text.split("\n"))
+def error_text(e: BaseException) -> str:
+    """An error's message as printed after ``synthgen: error:``: its lines as they are (a C
+    compiler's ``FILE:LINE:COLUMN: error: ...`` diagnostics one per line, as it printed them),
+    trailing blanks dropped."""
+    lines = [line.rstrip() for line in str(e).strip().splitlines()]
+    return "\n".join(lines) or type(e).__name__
 
 
 def add_extension_option(p: argparse.ArgumentParser) -> None:

@@ -1,4 +1,6 @@
-"""``synthgen replay JOURNAL -o DIR``: render a scene's change journal again, in this process."""
+"""``synthgen replay JOURNAL -o DIR``: render a scene's change journal again, in this process;
+like ``synthgen render``, it prints and records (meta.json) the replayed scene's objects (its
+visible instances, by id, with their labels) and lights."""
 from __future__ import annotations
 
 import argparse
@@ -24,7 +26,11 @@ def run(args: argparse.Namespace) -> int:
         say(f"{args.journal}: its last render was of labels only; rendering every channel")
     settings.update(overrides(args))
     out_dir = args.output or os.path.join("out", os.path.splitext(os.path.basename(args.journal))[0])
-    meta = {"source": os.path.abspath(args.journal), "objects": [], "lights": []}
+    # What the replayed scene holds (the journal has no scene file's names): its instances that
+    # render (hidden ones, a run's pooled instances, do not) and its lights.
+    instances = scene.instances()
+    meta = {"source": os.path.abspath(args.journal), "objects": [i for i in instances if i["visible"]],
+            "hidden_instances": sum(not i["visible"] for i in instances), "lights": scene.lights()}
     return render_and_write(scene, settings, meta, out_dir, args.journal)
 
 

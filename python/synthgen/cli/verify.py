@@ -14,7 +14,8 @@ def run(args: argparse.Namespace) -> int:
     from ..outputs.verify import verify_dataset
 
     r = verify_dataset(args.dataset)
-    print(f"{args.dataset}: ok: {r['frames']} frames, {r['annotations']} objects; COCO, YOLO and KITTI agree "
+    print(f"{args.dataset}: ok: {r['frames']} frames, {r['annotations']} objects ({r['inserted']} inserted, "
+          f"{r['real']} real); COCO, YOLO and KITTI agree "
           f"with the masks (classes: {', '.join(r['categories'])})")
     return 0
 

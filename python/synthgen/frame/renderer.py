@@ -320,6 +320,8 @@ class FrameRenderer:
             # The frame's weather (docs/weather.md): {condition: its parameters}, or none.
             "weather": ({key: {**params, **(weather_ctx[key].extra)} for key, params in spec.weather}
                         if spec.weather else None),
+            # Conditions drawn with no effect, left out of "weather" (a fog layer below the ground).
+            **({"weather_notes": list(spec.weather_notes)} if spec.weather_notes else {}),
             # Which image rgb is: the render's mean ("raw") or the denoiser's output ("denoised").
             "rgb": "denoised" if rs["denoise"] else "raw",
             # Texel memory of the image textures: every level, and as rendered (texture_lod keeps

@@ -17,7 +17,9 @@ __all__ = ["statistics", "format_statistics", "contact_sheet", "plot_statistics"
 
 def statistics(ds: Dataset, frames: Optional[Sequence[int]] = None) -> Dict[str, Any]:
     """Counts and distributions over the labelled, visible objects of ``frames`` (default:
-    all), from the frames' metadata."""
+    all), from the frames' metadata: the inserted (rendered) objects and a photo's labelled
+    real ones (``source: real`` in COCO) alike, as ``synthgen verify`` counts them (``objects``
+    = ``inserted`` + ``real``); occlusion and truncation are the inserted objects'."""
     frames = list(ds.frames if frames is None else frames)
     names = ds.class_names
     per_class = {n: 0 for n in names}
@@ -27,14 +29,17 @@ def statistics(ds: Dataset, frames: Optional[Sequence[int]] = None) -> Dict[str,
     occlusion: List[float] = []
     truncation: List[float] = []
     per_frame: List[int] = []
-    dropped = negatives = 0
+    dropped = negatives = inserted = real = 0
     for k in frames:
         meta = ds.meta(k)
         objs = [o for o in meta.get("objects", []) if o.get("label", True) and not o.get("dropped")
                 and o.get("visible_pixels")]
+        reals = [o for o in meta.get("real_objects", []) if not o["ignore"]]
         dropped += sum(1 for o in meta.get("objects", []) if o.get("dropped"))
         negatives += bool(meta.get("negative"))
-        per_frame.append(len(objs))
+        per_frame.append(len(objs) + len(reals))
+        inserted += len(objs)
+        real += len(reals)
         for o in objs:
             per_class[o["class"]] = per_class.get(o["class"], 0) + 1
             widths.append(float(o["bbox"][2]))
@@ -42,7 +47,13 @@ def statistics(ds: Dataset, frames: Optional[Sequence[int]] = None) -> Dict[str,
             classes.append(int(o["class_id"]))
             occlusion.append(float(o["occlusion"]))
             truncation.append(float(o["truncation"]))
-    return {"frames": len(frames), "objects": len(heights), "per_class": per_class, "box_heights": heights,
+        for o in reals:  # bbox [x0, y0, x1, y1]
+            per_class[o["class"]] = per_class.get(o["class"], 0) + 1
+            widths.append(float(o["bbox"][2] - o["bbox"][0]))
+            heights.append(float(o["bbox"][3] - o["bbox"][1]))
+            classes.append(int(o["class_id"]))
+    return {"frames": len(frames), "objects": len(heights), "inserted": inserted, "real": real,
+            "per_class": per_class, "box_heights": heights,
             "box_widths": widths, "classes": classes, "occlusion": occlusion, "truncation": truncation,
             "objects_per_frame": per_frame, "dropped": dropped, "negative_frames": negatives,
             "empty_frames": sum(1 for n in per_frame if n == 0), "class_names": list(names)}
@@ -51,16 +62,19 @@ def statistics(ds: Dataset, frames: Optional[Sequence[int]] = None) -> Dict[str,
 def format_statistics(st: Dict[str, Any]) -> str:
     """A plain-text summary of :func:`statistics`."""
     lines = [f"{st['frames']} frames, {st['objects']} labelled visible objects "
-             f"({st['empty_frames']} frames without any, {st['negative_frames']} of them negatives; "
-             f"{st['dropped']} objects dropped by placement)"]
+             f"({st['inserted']} inserted, {st['real']} real; {st['empty_frames']} frames without any, "
+             f"{st['negative_frames']} of them negatives; {st['dropped']} objects dropped by placement)"]
     lines.append("objects per class: " + ", ".join(f"{n} {c}" for n, c in st["per_class"].items()))
     if st["objects"]:
         h = np.array(st["box_heights"])
         q = np.percentile(h, [0, 10, 50, 90, 100])
         lines.append("box height, pixels: min {:.0f}, 10% {:.0f}, median {:.0f}, 90% {:.0f}, max {:.0f}".format(*q))
+    if st["occlusion"]:
         occ, tr = np.array(st["occlusion"]), np.array(st["truncation"])
-        lines.append(f"occlusion: mean {occ.mean():.2f}, {np.mean(occ > 0.5) * 100:.0f}% more than half hidden; "
-                     f"truncation: mean {tr.mean():.2f}, {np.mean(tr > 0) * 100:.0f}% cut by the image border")
+        lines.append(f"occlusion (inserted objects): mean {occ.mean():.2f}, {np.mean(occ > 0.5) * 100:.0f}% more "
+                     f"than half hidden; truncation: mean {tr.mean():.2f}, {np.mean(tr > 0) * 100:.0f}% cut by the "
+                     "image border")
+    if st["objects"]:
         pf = np.array(st["objects_per_frame"])
         lines.append(f"objects per frame: mean {pf.mean():.1f}, max {pf.max()}")
     return "\n".join(lines)
@@ -110,8 +124,9 @@ def contact_sheet(ds: Dataset, path: str, frames: Sequence[int], columns: int = 
             ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=True, facecolor=(0.5, 0.5, 0.5, 0.25),
                                    edgecolor=(0.6, 0.6, 0.6), linewidth=0.8, linestyle=":"))
         tag = " (negative)" if f.meta.get("negative") else ""
-        real = f" + {len(f.real_objects)} real" if f.real_objects else ""
-        ax.set_title(f"frame {k}: {len(f.objects)} objects{real}{tag}", fontsize=8)
+        n, r = len(f.objects), len(f.real_objects)
+        real = f" ({n} inserted, {r} real)" if r else ""
+        ax.set_title(f"frame {k}: {n + r} objects{real}{tag}", fontsize=8)
     fig.tight_layout()
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     fig.savefig(path, dpi=110)

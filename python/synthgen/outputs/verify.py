@@ -46,7 +46,9 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
     each COCO annotation decodes to exactly the pixels of its instance in instance/*.png,
     bbox and area are the mask's, the semantic mask holds its category there, every visible
     instance is labelled once, and the YOLO and KITTI files hold the same boxes and classes.
-    Returns counts; raises SynthgenError naming the first disagreement."""
+    Returns counts (``annotations`` = ``inserted`` + ``real``: the rendered objects and a photo's
+    labelled real ones, ``source: real``, as ``synthgen inspect`` counts them); raises
+    SynthgenError naming the first disagreement."""
     import json
 
     def fail(msg: str) -> None:
@@ -78,7 +80,7 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
                 _read_u16(path) if kind in ("instance", "semantic", "depth16") else _readable(path)
     if image_ids != frames:
         fail("annotations/coco.json does not list exactly the complete frames")
-    n_ann = 0
+    n_inserted = n_real = 0
     for k in frames:
         name = frame_name(k)
         ids = _read_u16(os.path.join(out_dir, "instance", name + ".png"))
@@ -113,7 +115,7 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
                 fail(f"frame {k}: YOLO line {jj + 1} differs from COCO's real object {j}")
             if kitti is not None and np.max(np.abs(np.subtract(kitti[jj]["bbox"], a["bbox"]))) > 0.01:
                 fail(f"frame {k}: KITTI line {jj + 1} differs from COCO's real object {j}")
-            n_ann += 1
+            n_real += 1
         for j, a in enumerate(anns):
             m = ids == a["instance_id"]
             if not np.array_equal(rle_decode(a["segmentation"]), m):
@@ -131,5 +133,6 @@ def verify_dataset(out_dir: str) -> Dict[str, Any]:
                 if kt["type"] != names[a["category_id"] - 1].replace(" ", "_") or \
                         np.max(np.abs(np.subtract(kt["bbox"], a["bbox"]))) > 0.01:
                     fail(f"frame {k}: KITTI line {j + 1} differs from COCO annotation {a['id']}")
-            n_ann += 1
-    return {"frames": len(frames), "annotations": n_ann, "categories": names}
+            n_inserted += 1
+    return {"frames": len(frames), "annotations": n_inserted + n_real, "inserted": n_inserted, "real": n_real,
+            "categories": names}

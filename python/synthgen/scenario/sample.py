@@ -105,6 +105,9 @@ class FrameSpec:
     #: The frame's weather: [(condition key, its parameters)], at most one per group
     #: (synthgen.randomize.weather), in the order they apply.
     weather: List[Tuple[str, Dict[str, Any]]] = field(default_factory=list)
+    #: Why a condition the frame drew is not its weather ("fog: no fog: top -3 m ..."): meta
+    #: ``weather_notes``.
+    weather_notes: List[str] = field(default_factory=list)
 
 
 #: The visibility limits an object entry may set for its instances.
@@ -152,7 +155,8 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
         for i, o in enumerate(objects):
             o.index = i
     steps = D.sample_tree(spec["post"], rng, "post", rec)
-    weather = sample_weather(spec["weather"], sc.seed, frame, rec)
+    weather_notes: List[str] = []
+    weather = sample_weather(spec["weather"], sc.seed, frame, rec, weather_notes)
     intrinsics = {k: float(camera[k]) for k in ("fx", "fy", "cx", "cy") if camera.get(k) is not None}
     return FrameSpec(
         frame=int(frame), seed=sc.seed,
@@ -162,4 +166,4 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
                           material=PluginSpec.of(ground["material"])),
         objects=objects, sampled={k: D.plain(v) for k, v in rec.items()},
         post=[PluginSpec(str(p["type"]), {k: v for k, v in p.items() if k != "type"}) for p in steps],
-        negative=negative, weather=weather)
+        negative=negative, weather=weather, weather_notes=weather_notes)

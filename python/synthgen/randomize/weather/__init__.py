@@ -21,6 +21,9 @@ Protocol (:class:`Condition`):
 - :meth:`Condition.check` -- what the scenario's inputs must satisfy (photo backgrounds and
   their depth maps, ...), reported at the condition's key before anything renders;
 - :meth:`Condition.params` -- the drawn values as the frame's plain parameters (meta);
+- :meth:`Condition.no_effect` -- why drawn parameters would change nothing (a fog layer whose
+  top a distribution put below the ground): the frame then has no condition of the group, and
+  its meta says why (``weather_notes``) instead of recording weather that is not there;
 - :meth:`Condition.object_values` -- randomizer values the condition gives the frame's objects
   that their scenario entry leaves unset (night: every vehicle's lamps on), before the
   randomizers apply;
@@ -93,6 +96,11 @@ class Condition:
         """The frame's parameters from the drawn values (plain numbers; recorded in meta)."""
         return {k: _plain(v) for k, v in value.items() if k != "probability"}
 
+    def no_effect(self, params: Mapping[str, Any]) -> Optional[str]:
+        """Why the frame's parameters would change nothing (then the frame has none of this
+        group's conditions), or None. Default: None."""
+        return None
+
     def object_values(self, params: Mapping[str, Any], spec: Any, obj: Any, shape: Any,
                       rng: np.random.Generator) -> Optional[Dict[str, Any]]:
         """{randomizer key: value} for one of the frame's objects (``obj``, an ObjectSpec, of
@@ -157,8 +165,11 @@ def schema() -> Record:
                                               f"condition per frame -- {groups}")
 
 
-def sample(w: Mapping[str, Any], seed: int, frame: int, rec: Dict[str, Any]) -> List[Tuple[str, Dict[str, Any]]]:
-    """The frame's conditions [(key, parameters)], at most one per group, in GROUPS' order."""
+def sample(w: Mapping[str, Any], seed: int, frame: int, rec: Dict[str, Any],
+           notes: Optional[List[str]] = None) -> List[Tuple[str, Dict[str, Any]]]:
+    """The frame's conditions [(key, parameters)], at most one per group, in GROUPS' order. A
+    condition whose drawn parameters would have no effect (:meth:`Condition.no_effect`) is not
+    the frame's: its group has none, and ``notes`` gets ``"KEY: reason"``."""
     from ...schema import distributions as D
     from ...schema.distributions import frame_rng
 
@@ -173,7 +184,12 @@ def sample(w: Mapping[str, Any], seed: int, frame: int, rec: Dict[str, Any]) -> 
             if not float(rng.random()) < float(spec["probability"]):
                 continue
             body = {k: v for k, v in spec.items() if k != "probability"}
-            out.append((c.key, c.params(D.sample_tree(body, rng, f"weather.{c.key}", rec))))
+            params = c.params(D.sample_tree(body, rng, f"weather.{c.key}", rec))
+            why = c.no_effect(params)
+            if why is None:
+                out.append((c.key, params))
+            elif notes is not None:
+                notes.append(f"{c.key}: {why}")
             break
     return out
 

@@ -9,6 +9,7 @@ from typing import Any, Dict, Mapping, Optional, Tuple
 
 import numpy as np
 
+from ...schema import distributions as D
 from ...schema.fields import Number, Record
 from ...schema.random import R
 from . import Condition, WeatherContext
@@ -33,14 +34,39 @@ def layer_schema(visibility: float, top: float, albedo: float, g: float) -> Reco
     })
 
 
+def _highest(v: Any) -> float:
+    """The largest value a number or a distribution over numbers may take."""
+    if isinstance(v, D.Choice):
+        return max(_highest(o) for o in v.options)
+    if isinstance(v, (D.Uniform, D.IntUniform, D.LogUniform)):
+        return float(np.max(v.hi))
+    if isinstance(v, D.Normal):
+        return float("inf") if v.hi is None else float(v.hi)
+    if isinstance(v, D.Distribution):
+        return float("inf")
+    return float(v)
+
+
+#: Why a layer whose top is at or below the ground does nothing.
+_BELOW_GROUND = ("at or below the ground (y = 0, where the objects stand): the layer, from the ground up to top, "
+                 "would hold nothing of the scene")
+
+
 class Layer(Condition):
     """A homogeneous layer from the ground up to ``top``: the path-traced medium, or over a
     photo background Koschmieder's law in image space from the photo's depth map
-    (synthgen.post.photo.fog), with the same extinction."""
+    (synthgen.post.photo.fog), with the same extinction. A ``top`` at or below the ground
+    (y = 0) is refused when no frame could draw one above it; a frame that draws one has no
+    layer (:meth:`no_effect`)."""
 
     group = "medium"
 
     def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
+        top = _highest(value["top"])
+        if top <= 0.0:  # every frame would draw a layer below the ground
+            what = "at most " if isinstance(value["top"], D.Distribution) else ""
+            args = (getattr(value, "locs", {})["top"],) if "top" in getattr(value, "locs", {}) else ()
+            fail(f"{what}{top:g} m, {_BELOW_GROUND}; give a top above 0 m (the layer's depth)", *args)
         if spec.get("background") is None or photos is None:
             return
         for i, path in enumerate(photos.paths):
@@ -51,6 +77,11 @@ class Layer(Condition):
 
     def params(self, value: Mapping[str, Any]) -> Dict[str, Any]:
         return {k: float(value[k]) for k in ("visibility", "top", "albedo", "g")}
+
+    def no_effect(self, params: Mapping[str, Any]) -> Optional[str]:
+        if float(params["top"]) <= 0.0:
+            return f"top {float(params['top']):.3g} m was drawn, {_BELOW_GROUND}: the frame has no {self.key}"
+        return None
 
     def apply(self, ctx: WeatherContext, params: Mapping[str, Any]) -> Optional[Dict[str, Any]]:
         if ctx.photo is not None:
