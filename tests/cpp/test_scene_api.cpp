@@ -16,6 +16,7 @@
 #include "mesh_checks.h"
 #include "core/error.h"
 #include "core/params.h"
+#include "core/sha256.h"
 
 using namespace sg;
 using sgtest::box;
@@ -471,4 +472,22 @@ TEST(scene_api, journal_replays_bit_identically_from_mid_life) {
   EXPECT_TRUE(fa.depth == fb.depth);
   EXPECT_TRUE(fa.instance_id == fb.instance_id);
   EXPECT_FALSE(fa.rgb == before.rgb) << "the edits changed the image";
+}
+
+TEST(scene_api, journal_sha256_gives_the_digests_of_fips_180_4) {
+  // The content hash by which journals record files (core/sha256.h): the standard's examples,
+  // fed in pieces that straddle its 64-byte blocks.
+  auto digest = [](const std::string& s, size_t piece) {
+    Sha256 h;
+    for (size_t i = 0; i < s.size(); i += piece) h.update(s.data() + i, std::min(piece, s.size() - i));
+    return h.hex();
+  };
+  EXPECT_EQ(digest("", 1), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(digest("abc", 1), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(digest("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq", 7),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(digest(std::string(1000000, 'a'), 4099), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  EXPECT_TRUE(Sha256::is_hex_digest(digest("abc", 3)));
+  EXPECT_FALSE(Sha256::is_hex_digest("../../etc/passwd"));
+  EXPECT_FALSE(Sha256::is_hex_digest(std::string(64, 'A')));
 }
