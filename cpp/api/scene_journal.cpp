@@ -562,11 +562,19 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
   auto scene = std::make_unique<Scene>();
   Scene& s = *scene;
   if (render_params) *render_params = ParamSet();
-  constexpr uint64_t k_max_slots = uint64_t(1) << 24;
   // Slot ids are handles never reused: an add gives the next id, which must be the recorded
-  // one once holes (removed objects before the journal began) are padded.
-  auto pad = [&](auto& vec, uint64_t id) {
-    if (id >= k_max_slots) throw Error("id " + std::to_string(id) + " is out of range");
+  // one once holes (removed objects before the journal began) are padded -- as many as the
+  // journal's content allows (xml::SlotBudget: its adds of the kind, its size).
+  std::error_code ec;
+  const uint64_t xml_bytes = std::filesystem::file_size(path, ec);
+  const SlotBudget budget{(ec ? 0 : xml_bytes) + bin.size()};
+  std::map<std::string, uint64_t> adds;  // add operations of each kind
+  for (pugi::xml_node n : root.children("op")) {
+    std::string kind = n.attribute("kind").as_string();
+    ++adds[kind == "add_shape" ? "add_mesh" : kind];
+  }
+  auto pad = [&](auto& vec, uint64_t id, const char* op, const char* kind) {
+    budget.check(std::min(id, UINT64_MAX - 1) + 1, adds[op], kind, "id " + std::to_string(id));
     if (id < vec.size()) throw Error("id " + std::to_string(id) + " is already taken");
     vec.resize(id);
   };
@@ -601,17 +609,17 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
           if (k == K::UpdateMesh) {
             s.update_mesh(id32, std::move(m));
           } else {
-            pad(s.m_meshes, id);
+            pad(s.m_meshes, id, "add_mesh", "meshes");
             expect(s.add_mesh(std::move(m)), id);
           }
           break;
         }
         case K::AddShape:
-          pad(s.m_meshes, id);
+          pad(s.m_meshes, id, "add_mesh", "meshes");
           expect(s.add_shape(n.attribute("type").as_string(), file_params()), id);
           break;
         case K::AddTexture: {
-          pad(s.m_textures, id);
+          pad(s.m_textures, id, "add_texture", "textures");
           std::string type = n.attribute("type").as_string();
           ParamSet ps = file_params();
           std::shared_ptr<ImageData> px;
@@ -620,12 +628,12 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
           break;
         }
         case K::AddMaterial:
-          pad(s.m_materials, id);
+          pad(s.m_materials, id, "add_material", "materials");
           expect(s.add_material(n.attribute("type").as_string(), file_params()), id);
           break;
         case K::UpdateMaterial: s.update_material(id32, n.attribute("type").as_string(), file_params()); break;
         case K::AddLight:
-          pad(s.m_lights, id);
+          pad(s.m_lights, id, "add_light", "lights");
           expect(s.add_light(n.attribute("type").as_string(), file_params()), id);
           break;
         case K::UpdateLight: s.update_light(id32, n.attribute("type").as_string(), file_params()); break;
@@ -636,7 +644,7 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
         case K::RemoveInstance: s.remove_instance(id32); break;
         case K::RemoveLight: s.remove_light(id32); break;
         case K::AddInstance: {
-          pad(s.m_instances, id);
+          pad(s.m_instances, id, "add_instance", "instances");
           auto t = parse_floats(n.attribute("world_from_object").as_string(), 16, "world_from_object");
           expect(s.add_instance(n.attribute("mesh").as_uint(), Transform::from_row_major(t.data()),
                                 n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
@@ -663,9 +671,10 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
         case K::SlotCounts: {
           uint64_t c[5];
           const char* names[5] = {"meshes", "textures", "materials", "instances", "lights"};
+          const char* ops[5] = {"add_mesh", "add_texture", "add_material", "add_instance", "add_light"};
           for (int i = 0; i < 5; ++i) {
             c[i] = n.attribute(names[i]).as_ullong();
-            if (c[i] > k_max_slots) throw Error(std::string("slot count of ") + names[i] + " is out of range");
+            budget.check(c[i], adds[ops[i]], names[i], std::string("the slot count of ") + names[i]);
           }
           s.restore_slot_counts(c[0], c[1], c[2], c[3], c[4]);
           break;
