@@ -1,5 +1,5 @@
 // Shared by the fuzz targets: files are read in this process with a smaller image limit, a
-// private temporary directory, writing bytes to a file.
+// private temporary directory (also their $SYNTHGEN_CACHE), writing bytes to a file.
 //
 // NOTE: SYNTHGEN_NO_ISOLATION: synthgen reads untrusted files in synthgen-reader, a separate
 // process (core/isolate.h); the targets read them here instead, so that the sanitizers see
@@ -34,6 +34,10 @@ inline const std::string& temp_dir() {
   }();
   return dir;
 }
+
+// Files a journal embeds are written to the resource store ($SYNTHGEN_CACHE/resources): the
+// process's own directory, not the user's cache.
+inline const int k_cache = setenv("SYNTHGEN_CACHE", (temp_dir() + "/cache").c_str(), 1);
 
 inline std::string write_file(const std::string& name, const uint8_t* data, size_t size) {
   std::string path = temp_dir() + "/" + name;

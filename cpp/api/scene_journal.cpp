@@ -1,13 +1,33 @@
 // The change journal (api/journal.h): recording, writing (XML in the scene file's vocabulary
 // plus a binary sidecar) and replaying.
+//
+// Files a journal names (parameters declared as paths: image textures, environment maps, grid
+// media, ...) are recorded by content, so that a journal replays after they are gone (a run's
+// temporary photo dome) or elsewhere: each as a <resource param= path= sha256= size=> child of
+// its operation, the file's bytes embedded in the sidecar when it has at most k_embed_max
+// bytes, else copied at write time into the resource store ($SYNTHGEN_CACHE/resources,
+// default ~/.cache/synthgen/resources) as SHA256.EXT. A replay uses the embedded bytes (written
+// to the store, where the plugin reads them) or the store's copy, else the file at its
+// recorded path if its content still has the recorded sha256; anything else is an error
+// naming the parameter, the recorded path, the sha256 and where it looked.
+#include <unistd.h>
+
+#include <atomic>
+#include <cctype>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
+#include <tuple>
+#include <vector>
 
 #include "api/scene.h"
 #include "api/xml_util.h"
 #include "core/error.h"
+#include "core/plugin.h"
+#include "core/sha256.h"
 
 namespace sg {
 
@@ -41,6 +61,253 @@ pugi::xml_node open_journal(pugi::xml_document& doc, const std::string& path) {
     throw FileError(path, "journal version " + std::string(root.attribute("version").as_string()) +
                               " (this synthgen reads version 1)");
   return root;
+}
+
+// Resources ------------------------------------------------------------------------------
+
+/// Files of at most this many bytes are embedded in the journal's sidecar; larger ones go to
+/// the resource store. Also the bound of an embedded resource a journal may claim.
+constexpr uint64_t k_embed_max = uint64_t(1) << 20;
+
+/// $SYNTHGEN_CACHE/resources (default ~/.cache/synthgen/resources): synthgen.scene.assets's
+/// cache directory.
+std::filesystem::path resource_store() {
+  const char* c = std::getenv("SYNTHGEN_CACHE");
+  if (c && *c) return std::filesystem::path(c) / "resources";
+  const char* home = std::getenv("HOME");
+  return std::filesystem::path(home && *home ? home : ".") / ".cache" / "synthgen" / "resources";
+}
+
+/// The extension of `path` when it is short and alphanumeric (".exr"), else "": a stored copy
+/// keeps it (readers pick the format by it); nothing of a hostile path gets further.
+std::string safe_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  if (ext.size() < 2 || ext.size() > 10) return "";
+  for (size_t i = 1; i < ext.size(); ++i)
+    if (!std::isalnum(static_cast<unsigned char>(ext[i]))) return "";
+  return ext;
+}
+
+/// The sha256 of a file's content and its size; false (and `error`) when it cannot be read.
+/// `copy_to` (non-empty): the bytes are also written there.
+bool hash_file(const std::filesystem::path& path, std::string* sha, uint64_t* size, std::string* error,
+               const std::filesystem::path& copy_to = {}) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    *error = "cannot open it";
+    return false;
+  }
+  std::ofstream out;
+  if (!copy_to.empty()) {
+    out.open(copy_to, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      *error = "cannot write " + copy_to.string();
+      return false;
+    }
+  }
+  Sha256 h;
+  std::vector<char> block(1 << 20);
+  *size = 0;
+  while (in) {
+    in.read(block.data(), std::streamsize(block.size()));
+    std::streamsize got = in.gcount();
+    if (got <= 0) break;
+    h.update(block.data(), size_t(got));
+    if (out.is_open()) out.write(block.data(), got);
+    *size += uint64_t(got);
+  }
+  if (in.bad()) {
+    *error = "read error";
+    return false;
+  }
+  if (out.is_open() && !out.flush()) {
+    *error = "cannot write " + copy_to.string();
+    return false;
+  }
+  *sha = h.hex();
+  return true;
+}
+
+/// hash_file, remembered per (path, size, modification time): a run saving every frame's
+/// journal hashes its large files once.
+bool hash_file_cached(const std::string& path, std::string* sha, uint64_t* size, std::string* error) {
+  static std::mutex mutex;
+  static std::map<std::string, std::tuple<uint64_t, int64_t, std::string>> known;
+  std::error_code ec;
+  const uint64_t fsize = std::filesystem::file_size(path, ec);
+  const auto mtime = ec ? 0 : std::filesystem::last_write_time(path, ec).time_since_epoch().count();
+  if (!ec) {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = known.find(path);
+    if (it != known.end() && std::get<0>(it->second) == fsize && std::get<1>(it->second) == int64_t(mtime)) {
+      *sha = std::get<2>(it->second);
+      *size = fsize;
+      return true;
+    }
+  }
+  if (!hash_file(path, sha, size, error)) return false;
+  if (!ec && *size == fsize) {
+    std::lock_guard<std::mutex> lock(mutex);
+    known[path] = {fsize, int64_t(mtime), *sha};
+  }
+  return true;
+}
+
+/// A temporary name next to `dest`, unique in this process and among processes.
+std::filesystem::path temp_name(const std::filesystem::path& dest) {
+  static std::atomic<uint64_t> counter{0};
+  return dest.string() + ".tmp" + std::to_string(getpid()) + "-" + std::to_string(counter++);
+}
+
+/// Copies `src` (content `sha`) into the store as SHA.EXT unless it is there; "" or the reason
+/// it could not.
+std::string store_file(const std::string& src, const std::string& sha, uint64_t size) {
+  std::error_code ec;
+  const std::filesystem::path dir = resource_store();
+  const std::filesystem::path dest = dir / (sha + safe_extension(src));
+  if (std::filesystem::is_regular_file(dest, ec) && std::filesystem::file_size(dest, ec) == size && !ec) return "";
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return "cannot create " + dir.string() + ": " + ec.message();
+  const std::filesystem::path tmp = temp_name(dest);
+  std::string got, error;
+  uint64_t got_size = 0;
+  if (!hash_file(src, &got, &got_size, &error, tmp)) {
+    std::filesystem::remove(tmp, ec);
+    return error;
+  }
+  if (got != sha) {
+    std::filesystem::remove(tmp, ec);
+    return "it changed while it was copied";
+  }
+  std::filesystem::rename(tmp, dest, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    return "cannot write " + dest.string();
+  }
+  return "";
+}
+
+/// The <resource> children of `n`: one for each given parameter that the plugin (kind, type)
+/// declares as a path (`skip`: a parameter that names no file, such as an in-memory image's
+/// key). `embedded`: sha256 -> sidecar offset of the files embedded so far (each once).
+void write_resources(pugi::xml_node n, const char* kind, const std::string& type, const ParamSet& params,
+                     std::ofstream& bin, std::map<std::string, uint64_t>* embedded, const char* skip = nullptr) {
+  const PluginInfo* info = Registry::instance().find(kind, type);
+  if (!info) return;
+  for (const auto& [name, value] : params.values()) {
+    const std::string* file = std::get_if<std::string>(&value);
+    const ParamDecl* decl = info->find(name);
+    if (!file || !decl || decl->type != ParamType::Path || (skip && decl->name == skip)) continue;
+    pugi::xml_node r = n.append_child("resource");
+    r.append_attribute("param") = name.c_str();
+    r.append_attribute("path") = file->c_str();
+    std::string sha, error;
+    uint64_t size = 0;
+    if (!hash_file_cached(*file, &sha, &size, &error)) {
+      r.append_attribute("unreadable") = error.c_str();
+      continue;
+    }
+    std::vector<char> bytes;
+    if (size <= k_embed_max) {  // embedded: the bytes read now, hashed as read
+      std::ifstream in(*file, std::ios::binary);
+      bytes.resize(size_t(k_embed_max) + 1);
+      in.read(bytes.data(), std::streamsize(bytes.size()));
+      bytes.resize(size_t(in.gcount()));
+      Sha256 h;
+      h.update(bytes.data(), bytes.size());
+      sha = h.hex();
+      size = bytes.size();
+    }
+    r.append_attribute("sha256") = sha.c_str();
+    r.append_attribute("size") = size;
+    if (size <= k_embed_max) {
+      auto it = embedded->find(sha);
+      if (it == embedded->end()) it = embedded->emplace(sha, append_blob(bin, bytes)).first;
+      r.append_attribute("offset") = it->second;
+    } else {
+      std::string why = store_file(*file, sha, size);
+      if (why.empty()) r.append_attribute("store") = "cache";
+      else r.append_attribute("store_error") = why.c_str();
+    }
+  }
+}
+
+/// `params` with each parameter that a <resource> child of `n` names replaced by a file with
+/// the recorded content (see the file's comment); throws sg::Error naming what is missing.
+ParamSet resolve_resources(pugi::xml_node n, ParamSet params, const std::vector<char>& bin) {
+  const std::filesystem::path store = resource_store();
+  for (pugi::xml_node r : n.children("resource")) {
+    const std::string name = r.attribute("param").as_string(), path = r.attribute("path").as_string();
+    const std::string what = std::string(n.attribute("type").as_string()) + " parameter '" + name + "' (file '" +
+                             path + "')";
+    if (!params.has(name) || !std::get_if<std::string>(&params.values().at(name)))
+      throw Error("a <resource> names parameter '" + name + "', which is not a file parameter of the operation");
+    if (r.attribute("unreadable"))
+      throw Error(what + ": the file could not be read when the journal was written (" +
+                  r.attribute("unreadable").as_string() + "); the journal cannot replay it");
+    const std::string sha = r.attribute("sha256").as_string();
+    if (!Sha256::is_hex_digest(sha))
+      throw Error(what + ": sha256 '" + sha.substr(0, 80) + "' is not 64 lowercase hex digits");
+    const uint64_t size = uint64_t(parse_integer(r.attribute("size").as_string(), 0, INT64_MAX, what + ": size"));
+    const std::filesystem::path stored = store / (sha + safe_extension(path));
+    std::error_code ec;
+    auto content = [&](const std::filesystem::path& p, std::string* got) {
+      uint64_t sz = 0;
+      std::string error;
+      return std::filesystem::is_regular_file(p, ec) && hash_file(p, got, &sz, &error);
+    };
+    std::string got;
+    if (r.attribute("offset")) {
+      if (size > k_embed_max)
+        throw Error(what + ": an embedded file of " + std::to_string(size) + " bytes (at most " +
+                    std::to_string(k_embed_max) + " are embedded)");
+      std::vector<char> bytes;
+      read_blob(bin, r.attribute("offset").as_ullong(), size_t(size), &bytes, what);
+      Sha256 h;
+      h.update(bytes.data(), bytes.size());
+      if (h.hex() != sha) throw Error(what + ": the embedded copy does not have its recorded sha256 " + sha);
+      if (!(content(stored, &got) && got == sha)) {
+        std::filesystem::create_directories(store, ec);
+        const std::filesystem::path tmp = temp_name(stored);
+        {
+          std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+          if (!bytes.empty()) out.write(bytes.data(), std::streamsize(bytes.size()));
+          if (!out.flush()) {
+            std::filesystem::remove(tmp, ec);
+            throw Error(what + ": cannot write its embedded copy to " + stored.string());
+          }
+        }
+        std::filesystem::rename(tmp, stored, ec);
+        if (ec) {
+          std::filesystem::remove(tmp, ec);
+          throw Error(what + ": cannot write its embedded copy to " + stored.string());
+        }
+      }
+      params.set(name, stored.string());
+      continue;
+    }
+    if (content(stored, &got) && got == sha) {
+      params.set(name, stored.string());
+      continue;
+    }
+    const std::string stored_note = std::filesystem::exists(stored, ec) ? " (a copy there has other content)" : "";
+    std::string at_path;
+    if (content(path, &at_path) && at_path == sha) {
+      params.set(name, path);
+      continue;
+    }
+    std::string msg = what + ", sha256 " + sha + ", " + std::to_string(size) + " bytes: ";
+    if (!at_path.empty())
+      msg += "the file at its path has changed since the journal was written (its sha256 is now " + at_path +
+             ") and the resource store has no copy: looked for " + stored.string() + stored_note;
+    else
+      msg += "missing: looked for " + stored.string() + stored_note + " and " + path;
+    if (r.attribute("store_error"))
+      msg += std::string("; it could not be stored when the journal was written: ") +
+             r.attribute("store_error").as_string();
+    throw Error(msg);
+  }
+  return params;
 }
 
 }  // namespace
@@ -168,6 +435,7 @@ void Scene::save_journal(const std::string& path) const {
   root.append_attribute("bin") = std::filesystem::path(bin_path).filename().string().c_str();
   // Meshes and pixels shared by several operations (the state and later edits) are written once.
   std::map<const void*, uint64_t> written;
+  std::map<std::string, uint64_t> embedded;  // files embedded so far: sha256 -> offset
   for (const JournalOp& o : m_journal) {
     pugi::xml_node n = root.append_child("op");
     n.append_attribute("kind") = journal_op_name(o.kind);
@@ -197,15 +465,20 @@ void Scene::save_journal(const std::string& path) const {
           if (o.flag) n.append_attribute("integer") = true;
         }
         write_params(n, o.params);
+        write_resources(n, "texture", o.type, o.params, bin, &embedded, o.pixels ? "file" : nullptr);
         break;
       case K::AddShape: case K::AddMaterial: case K::UpdateMaterial: case K::AddLight: case K::UpdateLight:
         n.append_attribute("id") = o.id;
         n.append_attribute("type") = o.type.c_str();
         write_params(n, o.params);
+        write_resources(n, o.kind == K::AddShape ? "shape" : o.kind == K::AddLight || o.kind == K::UpdateLight
+                                                                 ? "light" : "material",
+                        o.type, o.params, bin, &embedded);
         break;
       case K::SetMedium:
         n.append_attribute("type") = o.type.c_str();
         write_params(n, o.params);
+        write_resources(n, "medium", o.type, o.params, bin, &embedded);
         break;
       case K::Render:
         write_params(n, o.params);
@@ -289,11 +562,19 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
   auto scene = std::make_unique<Scene>();
   Scene& s = *scene;
   if (render_params) *render_params = ParamSet();
-  constexpr uint64_t k_max_slots = uint64_t(1) << 24;
   // Slot ids are handles never reused: an add gives the next id, which must be the recorded
-  // one once holes (removed objects before the journal began) are padded.
-  auto pad = [&](auto& vec, uint64_t id) {
-    if (id >= k_max_slots) throw Error("id " + std::to_string(id) + " is out of range");
+  // one once holes (removed objects before the journal began) are padded -- as many as the
+  // journal's content allows (xml::SlotBudget: its adds of the kind, its size).
+  std::error_code ec;
+  const uint64_t xml_bytes = std::filesystem::file_size(path, ec);
+  const SlotBudget budget{(ec ? 0 : xml_bytes) + bin.size()};
+  std::map<std::string, uint64_t> adds;  // add operations of each kind
+  for (pugi::xml_node n : root.children("op")) {
+    std::string kind = n.attribute("kind").as_string();
+    ++adds[kind == "add_shape" ? "add_mesh" : kind];
+  }
+  auto pad = [&](auto& vec, uint64_t id, const char* op, const char* kind) {
+    budget.check(std::min(id, UINT64_MAX - 1) + 1, adds[op], kind, "id " + std::to_string(id));
     if (id < vec.size()) throw Error("id " + std::to_string(id) + " is already taken");
     vec.resize(id);
   };
@@ -307,6 +588,8 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
     uint64_t id = n.attribute("id").as_ullong();
     uint32_t id32 = uint32_t(id);
     std::string where = "operation " + std::to_string(index++) + " (" + name + " " + std::to_string(id) + ")";
+    // The operation's parameters, the files it names as recorded (resolve_resources).
+    auto file_params = [&] { return resolve_resources(n, read_params(n), bin); };
     try {
       K k;
       if (!journal_op_kind(name, &k)) throw Error("unknown operation '" + name + "'");
@@ -326,42 +609,42 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
           if (k == K::UpdateMesh) {
             s.update_mesh(id32, std::move(m));
           } else {
-            pad(s.m_meshes, id);
+            pad(s.m_meshes, id, "add_mesh", "meshes");
             expect(s.add_mesh(std::move(m)), id);
           }
           break;
         }
         case K::AddShape:
-          pad(s.m_meshes, id);
-          expect(s.add_shape(n.attribute("type").as_string(), read_params(n)), id);
+          pad(s.m_meshes, id, "add_mesh", "meshes");
+          expect(s.add_shape(n.attribute("type").as_string(), file_params()), id);
           break;
         case K::AddTexture: {
-          pad(s.m_textures, id);
+          pad(s.m_textures, id, "add_texture", "textures");
           std::string type = n.attribute("type").as_string();
-          ParamSet ps = read_params(n);
+          ParamSet ps = file_params();
           std::shared_ptr<ImageData> px;
           if (n.attribute("offset")) px = read_pixels(n, bin, "texture " + std::to_string(id));
           expect(s.add_texture_entry(type, ps, px, n.attribute("integer").as_bool(false)), id);
           break;
         }
         case K::AddMaterial:
-          pad(s.m_materials, id);
-          expect(s.add_material(n.attribute("type").as_string(), read_params(n)), id);
+          pad(s.m_materials, id, "add_material", "materials");
+          expect(s.add_material(n.attribute("type").as_string(), file_params()), id);
           break;
-        case K::UpdateMaterial: s.update_material(id32, n.attribute("type").as_string(), read_params(n)); break;
+        case K::UpdateMaterial: s.update_material(id32, n.attribute("type").as_string(), file_params()); break;
         case K::AddLight:
-          pad(s.m_lights, id);
-          expect(s.add_light(n.attribute("type").as_string(), read_params(n)), id);
+          pad(s.m_lights, id, "add_light", "lights");
+          expect(s.add_light(n.attribute("type").as_string(), file_params()), id);
           break;
-        case K::UpdateLight: s.update_light(id32, n.attribute("type").as_string(), read_params(n)); break;
-        case K::SetMedium: s.set_medium(n.attribute("type").as_string(), read_params(n)); break;
+        case K::UpdateLight: s.update_light(id32, n.attribute("type").as_string(), file_params()); break;
+        case K::SetMedium: s.set_medium(n.attribute("type").as_string(), file_params()); break;
         case K::RemoveMesh: s.remove_mesh(id32); break;
         case K::RemoveTexture: s.remove_texture(id32); break;
         case K::RemoveMaterial: s.remove_material(id32); break;
         case K::RemoveInstance: s.remove_instance(id32); break;
         case K::RemoveLight: s.remove_light(id32); break;
         case K::AddInstance: {
-          pad(s.m_instances, id);
+          pad(s.m_instances, id, "add_instance", "instances");
           auto t = parse_floats(n.attribute("world_from_object").as_string(), 16, "world_from_object");
           expect(s.add_instance(n.attribute("mesh").as_uint(), Transform::from_row_major(t.data()),
                                 n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
@@ -388,9 +671,10 @@ std::unique_ptr<Scene> Scene::replay(const std::string& path, ParamSet* render_p
         case K::SlotCounts: {
           uint64_t c[5];
           const char* names[5] = {"meshes", "textures", "materials", "instances", "lights"};
+          const char* ops[5] = {"add_mesh", "add_texture", "add_material", "add_instance", "add_light"};
           for (int i = 0; i < 5; ++i) {
             c[i] = n.attribute(names[i]).as_ullong();
-            if (c[i] > k_max_slots) throw Error(std::string("slot count of ") + names[i] + " is out of range");
+            budget.check(c[i], adds[ops[i]], names[i], std::string("the slot count of ") + names[i]);
           }
           s.restore_slot_counts(c[0], c[1], c[2], c[3], c[4]);
           break;

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "api/scene.h"
@@ -118,23 +119,29 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
 
   auto scene = std::make_unique<Scene>();
   Scene& s = *scene;
-  // Slot ids are stable handles (never reused), so a file may have holes, but not more than
-  // k_max_slots of a kind: a hostile id must not make the loader allocate without bound.
-  constexpr uint64_t k_max_slots = uint64_t(1) << 24;
-  auto check_slots = [&](uint64_t n, const char* what) {
-    if (n > k_max_slots)
-      throw Error(std::string(what) + " " + std::to_string(n) + " is out of range (at most " +
-                  std::to_string(k_max_slots) + " slots of a kind)");
-  };
-  auto pad = [&](auto& vec, uint64_t id) {
-    check_slots(id, "id");
+  // Slot ids are stable handles (never reused), so a file may have holes, but only as many as
+  // its content allows (xml::SlotBudget): a hostile id must not make the loader allocate
+  // without bound. Ids must be below the file's slot counts (<slots>).
+  std::error_code ec;
+  const uint64_t xml_bytes = std::filesystem::file_size(path, ec);
+  SlotBudget budget{(ec ? 0 : xml_bytes) + bin.size()};
+  pugi::xml_node counts = root.child("slots");
+  std::map<std::string, uint64_t> n_entries;  // entries of each kind in the file
+  for (pugi::xml_node n : root.children()) ++n_entries[n.name()];
+  auto entries = [&](const char* tag) { return n_entries[tag]; };
+  auto pad = [&](auto& vec, uint64_t id, const char* tag, const char* kind) {
+    const std::string what = std::string(tag) + " id " + std::to_string(id);
+    budget.check(std::min(id, UINT64_MAX - 1) + 1, entries(tag), kind, what);
+    if (counts && id >= counts.attribute(kind).as_ullong())
+      throw Error(what + " is not below the file's slot count of " + kind + " (" +
+                  std::to_string(counts.attribute(kind).as_ullong()) + "): its ids and <slots> disagree");
     if (id < vec.size()) throw Error("duplicate id " + std::to_string(id));
     vec.resize(id);
   };
   try {
     for (pugi::xml_node n : root.children("texture")) {
       uint64_t id = n.attribute("id").as_ullong();
-      pad(s.m_textures, id);
+      pad(s.m_textures, id, "texture", "textures");
       std::string type = n.attribute("type").as_string();
       ParamSet ps = read_params(n);
       std::shared_ptr<ImageData> px;
@@ -142,17 +149,17 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
       s.add_texture_entry(type, ps, px, n.attribute("integer").as_bool(false));
     }
     for (pugi::xml_node n : root.children("material")) {
-      pad(s.m_materials, n.attribute("id").as_ullong());
+      pad(s.m_materials, n.attribute("id").as_ullong(), "material", "materials");
       s.add_material(n.attribute("type").as_string(), read_params(n));
     }
     for (pugi::xml_node n : root.children("mesh")) {
       uint64_t id = n.attribute("id").as_ullong();
-      pad(s.m_meshes, id);
+      pad(s.m_meshes, id, "mesh", "meshes");
       s.add_mesh(read_mesh(n, bin, "mesh " + std::to_string(id)));
     }
     for (pugi::xml_node n : root.children("instance")) {
       uint64_t id = n.attribute("id").as_ullong();
-      pad(s.m_instances, id);
+      pad(s.m_instances, id, "instance", "instances");
       auto t = parse_floats(n.attribute("world_from_object").as_string(), 16, "instance " + std::to_string(id));
       s.add_instance(n.attribute("mesh").as_uint(), Transform::from_row_major(t.data()),
                      n.attribute("class_id").as_uint(), n.attribute("instance_id").as_uint(),
@@ -164,14 +171,16 @@ std::unique_ptr<Scene> Scene::load(const std::string& path) {
                                                             "instance " + std::to_string(id)));
     }
     for (pugi::xml_node n : root.children("light")) {
-      pad(s.m_lights, n.attribute("id").as_ullong());
+      pad(s.m_lights, n.attribute("id").as_ullong(), "light", "lights");
       s.add_light(n.attribute("type").as_string(), read_params(n));
     }
     if (pugi::xml_node n = root.child("medium")) s.set_medium(n.attribute("type").as_string(), read_params(n));
     if (pugi::xml_node n = root.child("camera")) s.set_camera(read_camera(n));
-    pugi::xml_node counts = root.child("slots");
-    for (const char* kind : {"meshes", "textures", "materials", "instances", "lights"})
-      check_slots(counts.attribute(kind).as_ullong(), "slot count");
+    const std::pair<const char*, const char*> kinds[] = {
+        {"mesh", "meshes"}, {"texture", "textures"}, {"material", "materials"}, {"instance", "instances"},
+        {"light", "lights"}};
+    for (const auto& [tag, kind] : kinds)
+      budget.check(counts.attribute(kind).as_ullong(), entries(tag), kind, std::string("the slot count of ") + kind);
     s.restore_slot_counts(counts.attribute("meshes").as_ullong(), counts.attribute("textures").as_ullong(),
                           counts.attribute("materials").as_ullong(), counts.attribute("instances").as_ullong(),
                           counts.attribute("lights").as_ullong());

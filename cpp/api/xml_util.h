@@ -5,6 +5,7 @@
 
 #include <pugixml.hpp>
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cstdint>
@@ -156,6 +157,31 @@ inline std::vector<char> read_sidecar(const std::string& path, pugi::xml_node ro
   if (size && !in.read(bin.data(), std::streamsize(size))) throw FileError(bin_path.string(), "cannot read the binary sidecar");
   return bin;
 }
+
+/// Slot ids are stable handles, never reused, so a file may leave empty slots (the ids of objects
+/// removed before it was written) below its highest id, and its loader allocates them all. How
+/// many slots of one kind a file may make its loader allocate: its `entries` of that kind plus
+/// k_free_holes empty ones, or one more per byte of the file (`file_bytes`: XML and sidecar)
+/// beyond that, at most k_max_slots. A hostile id (2^24 - 1 in a file of one entry) fails before
+/// anything is allocated instead of making the loader allocate 2^24 slots.
+struct SlotBudget {
+  static constexpr uint64_t k_max_slots = uint64_t(1) << 24;
+  static constexpr uint64_t k_free_holes = uint64_t(1) << 16;
+  uint64_t file_bytes = 0;
+
+  uint64_t limit(uint64_t entries) const {
+    return std::min(k_max_slots, entries + std::max(k_free_holes, file_bytes));
+  }
+  /// Throws unless `slots` slots of `kind` ("instances") fit, naming `what` ("instance id 7",
+  /// "slot count of instances") and the file's content.
+  void check(uint64_t slots, uint64_t entries, const char* kind, const std::string& what) const {
+    if (slots <= limit(entries)) return;
+    throw Error(what + " is out of range: the file has " + std::to_string(entries) + " " + kind + " and " +
+                std::to_string(file_bytes) + " bytes, which allow at most " + std::to_string(limit(entries)) +
+                " slots of " + kind + " (its entries, plus " + std::to_string(k_free_holes) +
+                " empty ones or one per byte of the file)");
+  }
+};
 
 /// A mesh's arrays into the sidecar, their offsets and sizes as attributes of `n`.
 inline void write_mesh(pugi::xml_node n, const TriangleMesh& m, std::ofstream& bin) {

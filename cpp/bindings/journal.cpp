@@ -33,7 +33,8 @@ void bind_journal(py::class_<Scene>& scene) {
       .def_property_readonly("journal_size", &Scene::journal_size, "operations recorded so far")
       .def("save_journal", &Scene::save_journal, py::arg("path"),
            "Writes the journal: XML in the scene file's vocabulary plus a binary sidecar PATH.bin (arrays, pixels, "
-           "the extensions' sources). Scene.replay(PATH) renders bit-identically.")
+           "the extensions' sources, the files it names of at most 1 MiB; larger ones are copied into "
+           "$SYNTHGEN_CACHE/resources, named by sha256). Scene.replay(PATH) renders bit-identically.")
       .def("note_extension", &Scene::note_extension, py::arg("source"), py::arg("sha256"), py::arg("text"),
            "Records that an extension was loaded for this scene (its source is embedded in saved journals).")
       .def("set_journal_autosave", &Scene::set_journal_autosave, py::arg("path"),

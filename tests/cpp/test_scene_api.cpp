@@ -2,12 +2,14 @@
 // stability, save/load round trips that render bit-identically, and error handling.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -16,6 +18,7 @@
 #include "mesh_checks.h"
 #include "core/error.h"
 #include "core/params.h"
+#include "core/sha256.h"
 
 using namespace sg;
 using sgtest::box;
@@ -471,4 +474,88 @@ TEST(scene_api, journal_replays_bit_identically_from_mid_life) {
   EXPECT_TRUE(fa.depth == fb.depth);
   EXPECT_TRUE(fa.instance_id == fb.instance_id);
   EXPECT_FALSE(fa.rgb == before.rgb) << "the edits changed the image";
+}
+
+namespace {
+
+/// The process's peak resident memory, bytes.
+uint64_t peak_rss() {
+  struct rusage ru {};
+  getrusage(RUSAGE_SELF, &ru);
+  return uint64_t(ru.ru_maxrss) * 1024;
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+/// The message of the sg::Error that `f` throws ("" when it throws none).
+template <class F>
+std::string error_of(F f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(scene_api, a_hostile_slot_id_fails_before_the_loader_allocates_its_slots) {
+  // Ids of removed objects stay empty slots, so a file may name an id above its entries; one
+  // naming id 2^24 - 1 with a single light made both loaders allocate 2^24 slots (~1.6 GB of
+  // std::optional<LightEntry>, every one touched). Now holes are bounded by the file's content.
+  const std::string dir = temp_dir();
+  const std::string light = "<param name=\"position\" type=\"floats\" value=\"0 1 0\"/>";
+  write_text(dir + "/hostile.xml.bin", "");
+  write_text(dir + "/hostile.xml", "<synthgen_scene version=\"1\" bin=\"hostile.xml.bin\"><slots meshes=\"0\" "
+                                   "textures=\"0\" materials=\"0\" instances=\"0\" lights=\"16777216\"/>"
+                                   "<light id=\"16777215\" type=\"point\">" + light + "</light></synthgen_scene>");
+  write_text(dir + "/hostile.journal.bin", "");
+  write_text(dir + "/hostile.journal", "<synthgen_journal version=\"1\" bin=\"hostile.journal.bin\">"
+                                       "<op kind=\"add_light\" id=\"16777215\" type=\"point\">" + light +
+                                       "</op></synthgen_journal>");
+  const uint64_t before = peak_rss();
+  std::string e = error_of([&] { Scene::load(dir + "/hostile.xml"); });
+  EXPECT_NE(e.find("light id 16777215 is out of range: the file has 1 lights"), std::string::npos) << e;
+  e = error_of([&] { Scene::replay(dir + "/hostile.journal"); });
+  EXPECT_NE(e.find("operation 0 (add_light 16777215): id 16777215 is out of range: the file has 1 lights"),
+            std::string::npos) << e;
+  EXPECT_LT(peak_rss() - before, uint64_t(64) << 20) << "the loaders' peak memory grew by this much";
+  // Ids above the file's own slot counts are inconsistent: named, not padded.
+  write_text(dir + "/ids.xml.bin", "");
+  write_text(dir + "/ids.xml", "<synthgen_scene version=\"1\" bin=\"ids.xml.bin\"><slots meshes=\"0\" "
+                               "textures=\"0\" materials=\"0\" instances=\"0\" lights=\"1\"/>"
+                               "<light id=\"3\" type=\"point\">" + light + "</light></synthgen_scene>");
+  e = error_of([&] { Scene::load(dir + "/ids.xml"); });
+  EXPECT_NE(e.find("light id 3 is not below the file's slot count of lights (1)"), std::string::npos) << e;
+  // Holes within the bound load, with their ids.
+  Scene s;
+  for (int i = 0; i < 3; ++i) s.add_light("point", ParamSet());
+  s.remove_light(0);
+  s.remove_light(1);
+  s.save(dir + "/holes.xml");
+  auto loaded = Scene::load(dir + "/holes.xml");
+  ASSERT_EQ(loaded->lights().size(), 3u);
+  EXPECT_TRUE(loaded->lights()[2].has_value());
+  EXPECT_FALSE(loaded->lights()[0].has_value());
+}
+
+TEST(scene_api, journal_sha256_gives_the_digests_of_fips_180_4) {
+  // The content hash by which journals record files (core/sha256.h): the standard's examples,
+  // fed in pieces that straddle its 64-byte blocks.
+  auto digest = [](const std::string& s, size_t piece) {
+    Sha256 h;
+    for (size_t i = 0; i < s.size(); i += piece) h.update(s.data() + i, std::min(piece, s.size() - i));
+    return h.hex();
+  };
+  EXPECT_EQ(digest("", 1), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(digest("abc", 1), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(digest("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq", 7),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  EXPECT_EQ(digest(std::string(1000000, 'a'), 4099), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  EXPECT_TRUE(Sha256::is_hex_digest(digest("abc", 3)));
+  EXPECT_FALSE(Sha256::is_hex_digest("../../etc/passwd"));
+  EXPECT_FALSE(Sha256::is_hex_digest(std::string(64, 'A')));
 }

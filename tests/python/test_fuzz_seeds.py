@@ -1,8 +1,10 @@
 """The seeds of the C++ fuzz targets (fuzz/corpus/<target>/seed-*) are valid inputs, so the
 fuzzers start from files that reach deep into the loaders (a scene seed whose sidecar name
 did not match what the target writes kept fuzz_scene_xml at the first check)."""
+import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import synthgen as sg
@@ -36,3 +38,16 @@ def test_image_seeds_load(tmp_path, name):
     path = tmp_path / f"image.{ext}"
     path.write_bytes(data[1:])
     assert sg.read_image(str(path)).size > 0
+
+
+def test_journal_seed_with_an_embedded_file_replays(tmp_path, monkeypatch):
+    """seed-resource: a journal whose environment map ("sky.exr", a relative path that exists
+    nowhere) is embedded in its sidecar, so that fuzz_journal reaches resolve_resources."""
+    monkeypatch.setenv("SYNTHGEN_CACHE", str(tmp_path / "cache"))
+    data = (CORPUS / "fuzz_journal" / "seed-resource").read_bytes()
+    xml, binary = data.split(b"\0BIN\0", 1)
+    (tmp_path / "journal.xml").write_bytes(xml)  # the names fuzz_journal.cpp writes
+    (tmp_path / "journal.xml.bin").write_bytes(binary)
+    assert not os.path.exists("sky.exr")
+    s = sg.Scene.replay(str(tmp_path / "journal.xml"))
+    assert np.asarray(s.render(spp=1, seed=1).rgb).max() > 0

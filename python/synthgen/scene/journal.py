@@ -5,8 +5,11 @@ happens, so that a scene can be saved as it was at a failure and replayed elsewh
 ``scene.save_journal(path)`` writes it (XML in the scene file's vocabulary, arrays and the
 sources of the extensions the scene uses in ``path.bin``); :func:`replay` (``Scene.replay``)
 applies it to a fresh scene, which renders bit-identically; ``synthgen replay JOURNAL``
-re-renders it in a fresh process: what a user sends with a bug report. Image files are
-referenced by path (a report sends them along).
+re-renders it in a fresh process: what a user sends with a bug report. Files the journal
+names (image textures, environment maps such as a photo frame's temporary dome, grid media) are
+recorded by sha256: embedded when at most 1 MiB, else copied into ``$SYNTHGEN_CACHE/resources``
+when it is written; a replay that finds neither them nor an unchanged file at the recorded path
+raises naming the parameter, the path, the sha256 and where it looked (docs/extensions.md).
 """
 from __future__ import annotations
 
