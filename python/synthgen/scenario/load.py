@@ -18,7 +18,7 @@ from ..schema import limits
 from ..schema.errors import Loc, SceneFileError, ValidationContext, suggest
 from ..schema.fields import Validated
 from ..schema.yaml_io import parse_yaml, read_text
-from .schema import SCENARIO_SCHEMA
+from .schema import SCENARIO_SCHEMA, exposure_mode
 
 __all__ = ["Scenario", "load_scenario", "parse_scenario", "check_memory"]
 
@@ -161,6 +161,23 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
         if o["rests_on"] is not None and o["pixel_height"] is not None:
             ctx.error(o.locs["pixel_height"], "an object that rests_on another cannot also be placed by pixel_height")
     support_of(spec, ctx)
+    _check_exposure(spec, ctx)
+
+
+def _check_exposure(spec: Validated, ctx: ValidationContext) -> None:
+    """camera.exposure: its keys agree with its mode; none on photo backgrounds."""
+    cam = spec["camera"]
+    ex = cam["exposure"]
+    mode = exposure_mode(ex, spec["version"])
+    if mode == "auto" and "factor" in ex.given:
+        ctx.error(ex.locs["factor"], "a fixed factor with mode: auto (the metered exposure): give mode: fixed, or no "
+                                     "factor (ev compensates the metered exposure)")
+    if mode == "fixed" and "key" in ex.given:
+        ctx.error(ex.locs["key"], "key is auto-exposure's (mode: auto); a fixed exposure is factor (and ev)")
+    if spec["background"] is not None and ex.given:
+        ctx.error(cam.locs.get("exposure", cam.loc), "photo backgrounds take the photo's own exposure (the render is "
+                                                     "matched to the photo's light, meta background.exposure): "
+                                                     "camera.exposure is for synthetic frames; remove it")
 
 
 def support_of(spec: Validated, ctx: Optional[ValidationContext] = None) -> List[Optional[int]]:

@@ -1,0 +1,234 @@
+"""The camera's exposure of synthetic frames (scenario ``camera.exposure``, format version 2;
+synthgen.frame.exposure, synthgen.post.exposure): the metering on analytic images (a uniform
+grey lands on the key, a small sun barely moves it, a bright sky is kept below white), a
+physical sky with a yellow car (blown out to white as rendered) exposed with the car's colour
+kept, version 1 frames left as rendered, the factor in meta and the image exactly the render
+times it, ev and factor, dusk/night keeping their own (dark) exposure, and the format's
+errors naming the key."""
+from __future__ import annotations
+
+import colorsys
+import json
+import os
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+from synthgen import SceneFileError
+from synthgen import scenario as S
+from synthgen.frame import FrameRenderer
+from synthgen.post import exposure as E
+from synthgen.scenario import parse_scenario
+from synthgen.schema.yaml_io import parse_yaml
+
+Y = np.array([0.2126, 0.7152, 0.0722])
+
+# A sky at physical scale (no strength: luminance / 683, a clear day's sky ~ 5-15 units)
+# over a yellow car-sized box.
+SKY_CAR = """
+version: {version}
+seed: 7
+resolution: [48, 32]
+camera:
+  fov_y: 40
+  pose: {{type: orbit, target: [0, 0.6, 0], distance: 6, elevation: 12, azimuth: 30}}
+  {exposure}
+lights: [{{type: sky, elevation: 40, azimuth: 120, turbidity: 3}}]
+objects:
+  - {{class: car, primitive: box, size: [2.0, 1.2, 1.6], material: {{type: coated, albedo: [0.8, 0.6, 0.05],
+      roughness: 0.1}}}}
+placement: {{region: [-0.2, -0.2, 0.2, 0.2]}}
+render: {{spp: 8, max_depth: 4}}
+{extra}
+"""
+
+
+def _scenario(version=2, exposure="", extra=""):
+    text = SKY_CAR.format(version=version, exposure=exposure, extra=extra)
+    return parse_scenario(parse_yaml(text), "s.yaml", os.getcwd(), text)
+
+
+def _render(version=2, exposure="", extra="", frame=0):
+    return FrameRenderer(_scenario(version, exposure, extra)).render(frame)
+
+
+# -- metering on analytic images --------------------------------------------------------------
+
+@pytest.mark.parametrize("grey", [1e-3, 0.18, 0.5, 7.0, 2500.0])
+def test_a_uniform_grey_is_exposed_to_the_key(grey):
+    rgb = np.full((30, 40, 3), grey, np.float32)
+    a = E.auto_factor(rgb)
+    assert a["factor"] * float(np.float32(grey)) == pytest.approx(E.KEY, rel=1e-12)
+    assert not a["highlight_limited"]
+    # ev is exposure compensation in stops on top of the metered factor.
+    assert E.auto_factor(rgb, ev=1.5)["factor"] == pytest.approx(a["factor"] * 2.0 ** 1.5, rel=1e-12)
+    assert E.auto_factor(rgb, key=0.09)["factor"] == pytest.approx(a["factor"] / 2.0, rel=1e-12)
+
+
+def test_a_small_sun_barely_moves_the_metering():
+    """0.1% of the pixels a million times brighter (the sun's disc) change the exposure by
+    less than 1%; an unclipped log-average would move by 2^(0.001 log2 1e6) - 1 ~ 1.4%,
+    the plain mean by a factor of 1000."""
+    rng = np.random.default_rng(1)
+    rgb = (0.3 + 0.2 * rng.random((100, 100, 3))).astype(np.float32)
+    sun = rgb.copy()
+    sun[50, 40:50] = 1e6
+    a, b = E.auto_factor(rgb)["factor"], E.auto_factor(sun)["factor"]
+    assert abs(b / a - 1.0) < 0.01, (a, b)
+
+
+def test_a_bright_sky_over_a_quarter_of_the_frame_is_kept_below_white():
+    """Highlight protection: a sky 40x brighter than the ground over the top 30% of the frame
+    would be mapped far past white by the log-average alone; at most 3% of pixels clip."""
+    rgb = np.full((100, 100, 3), 0.05, np.float32)
+    rgb[:30] = 2.0
+    a = E.auto_factor(rgb)
+    y = (rgb.astype(np.float64) @ Y) * a["factor"]
+    assert a["highlight_limited"] and (y > 1.0 + 1e-9).mean() <= 0.03
+    assert y.max() == pytest.approx(1.0, rel=1e-9)
+
+
+def test_a_black_frame_keeps_its_factor_finite():
+    a = E.auto_factor(np.zeros((8, 8, 3), np.float32), ev=-1.0)
+    assert a["factor"] == 0.5 and a["metered"] == 0.0
+    nan = np.full((8, 8, 3), np.nan, np.float32)
+    assert np.isfinite(E.auto_factor(nan)["factor"])
+
+
+def test_metering_is_centre_weighted_and_deterministic():
+    """The same bright patch meters brighter in the centre than in a corner; the same image
+    gives the same figures bit for bit."""
+    centre = np.full((40, 60, 3), 0.1, np.float32)
+    corner = centre.copy()
+    centre[15:25, 25:35] = 1.0
+    corner[:10, :10] = 1.0
+    assert E.meter(centre)["log_average"] > E.meter(corner)["log_average"]
+    assert E.meter(centre) == E.meter(centre.copy())
+
+
+# -- frames -------------------------------------------------------------------------------------
+
+def _car_pixels(arrays):
+    return np.asarray(arrays["rgb"], np.float64)[np.asarray(arrays["instance_id"]) == 1]
+
+
+def test_a_physical_sky_is_exposed_and_the_yellow_car_keeps_its_colour():
+    """Version 1 renders a physical sky as it is: the car's pixels past white (this is the
+    bug). Version 2 meters: no car pixel clips, the car is yellow (hue within 15 degrees of its
+    paint's, R > G > B), and the frame is neither black nor white."""
+    old, meta_old, _ = _render(version=1)
+    assert (_car_pixels(old) >= 1.0).any(axis=1).mean() > 0.5
+    assert meta_old["exposure"]["mode"] == "fixed" and meta_old["exposure"]["factor"] == 1.0
+    new, meta, _ = _render(version=2)
+    e = meta["exposure"]
+    assert e["mode"] == "auto" and 0.0 < e["factor"] < 0.1 and e["metered"] > 1.0, e
+    car = _car_pixels(new)
+    assert car.size and (car < 1.0).all(), car.max()
+    mean = car.mean(axis=0)
+    assert mean[0] > mean[1] > mean[2]
+    hue = colorsys.rgb_to_hsv(*mean)[0] * 360.0
+    paint = colorsys.rgb_to_hsv(0.8, 0.6, 0.05)[0] * 360.0
+    assert abs(hue - paint) < 15.0, (hue, paint)
+    y = np.asarray(new["rgb"], np.float64) @ Y
+    assert 0.05 < float(np.median(y)) < 0.6
+
+
+def test_the_image_is_the_render_times_the_recorded_factor():
+    """Auto-exposure's pre-pass changes nothing of the render: the frame equals the same
+    frame with that factor given as a fixed exposure, bit for bit, labels included; ev: 1
+    doubles the factor; a version 1 frame is fixed at 1 unless it says otherwise."""
+    auto, meta, _ = _render()
+    f = meta["exposure"]["factor"]
+    assert meta["exposure"]["total"] == f
+    fixed, meta_fixed, _ = _render(exposure=f"exposure: {{mode: fixed, factor: {f!r}}}")
+    assert meta_fixed["exposure"] == {"mode": "fixed", "factor": f, "ev": 0.0, "total": f}
+    for k in ("rgb", "depth", "instance_id", "class_id", "normal", "albedo"):
+        assert np.array_equal(np.asarray(auto[k]), np.asarray(fixed[k]), equal_nan=True), k
+    brighter, meta_ev, _ = _render(exposure="exposure: {ev: 1}")
+    assert meta_ev["exposure"]["factor"] == pytest.approx(2.0 * f, rel=1e-12)
+    assert meta_ev["exposure"]["metered"] == meta["exposure"]["metered"]
+    raw, _, _ = _render(version=1)
+    assert np.array_equal(np.asarray(fixed["rgb"]), (np.asarray(raw["rgb"]) * np.float32(f)).astype(np.float32))
+    v1_auto, meta_v1, _ = _render(version=1, exposure="exposure: {mode: auto}")
+    assert meta_v1["exposure"]["factor"] == f
+
+
+def test_a_randomized_exposure_draws_from_its_own_stream():
+    """ev as a distribution: recorded under camera.exposure.ev, and every other draw is the
+    frame's draw without it."""
+    _, a, _ = _render(exposure="exposure: {mode: fixed, ev: {uniform: [-1, 1]}}", frame=2)
+    _, b, _ = _render(exposure="exposure: {mode: fixed}", frame=2)
+    ev = a["sampled"]["camera.exposure.ev"]
+    assert -1.0 <= ev <= 1.0 and a["exposure"]["factor"] == pytest.approx(2.0 ** ev, rel=1e-12)
+    assert {k: v for k, v in a["sampled"].items() if not k.startswith("camera.exposure")} == b["sampled"]
+
+
+def _log_average(rgb):
+    y = np.asarray(rgb, np.float64) @ Y
+    return float(np.exp(np.mean(np.log(np.maximum(y, 1e-4)))))
+
+
+NIGHT = ("weather: {night: {elevation: -30, sky_glow: 0.01, moon: {probability: 0}, "
+         "street_lights: {spacing: 12, offset: 5, poles: false}}}")
+
+
+def test_night_keeps_its_own_dark_exposure():
+    """A night scene is metered by the night condition (its lower key keeps it dark): in
+    version 2 its image is version 1's bit for bit, meta says who metered, and ev still
+    compensates."""
+    v1, m1, _ = _render(version=1, extra=NIGHT)
+    v2, m2, _ = _render(version=2, extra=NIGHT)
+    assert m2["exposure"] == {"mode": "auto", "factor": 1.0, "ev": 0.0, "metered_by": "weather.night",
+                              "total": m1["exposure"]["total"]}
+    assert np.array_equal(np.asarray(v1["rgb"]), np.asarray(v2["rgb"]))
+    day, _, _ = _render(version=2)
+    night_key, day_key = _log_average(v2["rgb"]), _log_average(day["rgb"])
+    print(f"\nlog-average luminance: night {night_key:.4f}, day {day_key:.4f}")
+    assert night_key < 0.1 and night_key < 0.5 * day_key
+    v3, m3, _ = _render(version=2, exposure="exposure: {ev: 1}", extra=NIGHT)
+    assert m3["exposure"]["factor"] == 2.0
+    assert np.array_equal(np.asarray(v3["rgb"]), (np.asarray(v1["rgb"]) * np.float32(2.0)).astype(np.float32))
+
+
+# -- the format -----------------------------------------------------------------------------------
+
+def _error(tmp_path, text):
+    p = tmp_path / "s.yaml"
+    p.write_text(text)
+    with pytest.raises(SceneFileError) as ei:
+        S.load_scenario(str(p))
+    return ei.value
+
+
+BASE = "version: {v}\nobjects: [{{class: a, primitive: box}}]\ncamera:\n  exposure: {e}\n"
+
+
+@pytest.mark.parametrize("v, e, key, words", [
+    (2, "{mode: auto, factor: 2}", "camera.exposure.factor", ["fixed factor with mode: auto"]),
+    (2, "{factor: 2, key: 0.1}", "camera.exposure.key", ["key is auto-exposure's"]),
+    (1, "{key: 0.1}", "camera.exposure.key", ["key is auto-exposure's"]),
+    (2, "{mode: manual}", "camera.exposure.mode", ["auto, fixed"]),
+    (2, "{ev: 30}", "camera.exposure.ev", ["out of range"]),
+    (2, "{factor: 0}", "camera.exposure.factor", ["out of range"]),
+    (3, "{}", "version", ["out of range", "[1, 2]"]),
+])
+def test_format_errors_name_the_key(tmp_path, v, e, key, words):
+    err = _error(tmp_path, BASE.format(v=v, e=e))
+    assert err.key_path == key, str(err)
+    assert err.line is not None
+    for w in words:
+        assert w in str(err), str(err)
+
+
+def test_photo_backgrounds_refuse_a_camera_exposure(tmp_path):
+    text = ("version: 2\nobjects: [{class: a, primitive: box}]\ncamera:\n  exposure: {ev: 1}\n"
+            "background: {photos: [p.jpg]}\n")
+    err = _error(tmp_path, text)
+    assert err.key_path == "camera.exposure" and "photo's own exposure" in str(err), str(err)
+
+
+def test_version_2_is_the_default_of_nothing_else():
+    """A scenario without version is version 1 (every scenario written before version 2)."""
+    sc = parse_scenario(parse_yaml("objects: [{class: a, primitive: box}]\n"), "s.yaml", os.getcwd())
+    assert sc.spec["version"] == 1 and S.sample_frame(sc, 0).camera.exposure["mode"] == "fixed"
