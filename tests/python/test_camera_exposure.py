@@ -3,8 +3,8 @@ synthgen.frame.exposure, synthgen.post.exposure): the metering on analytic image
 grey lands on the key, a small sun barely moves it, a bright sky is kept below white), a
 physical sky with a yellow car (blown out to white as rendered) exposed with the car's colour
 kept, version 1 frames left as rendered, the factor in meta and the image exactly the render
-times it, ev and factor, dusk/night keeping their own (dark) exposure, and the format's
-errors naming the key."""
+times it, ev and factor, dusk/night keeping their own (dark) exposure, replayed journals
+applying it, and the format's errors naming the key."""
 from __future__ import annotations
 
 import colorsys
@@ -189,6 +189,26 @@ def test_night_keeps_its_own_dark_exposure():
     v3, m3, _ = _render(version=2, exposure="exposure: {ev: 1}", extra=NIGHT)
     assert m3["exposure"]["factor"] == 2.0
     assert np.array_equal(np.asarray(v3["rgb"]), (np.asarray(v1["rgb"]) * np.float32(2.0)).astype(np.float32))
+
+
+def test_a_replayed_journal_applies_the_frames_exposure(tmp_path):
+    """`synthgen replay` of a version 2 frame's journal writes the frame's image (the render
+    times the recorded exposure), not the blown-out render."""
+    from synthgen import run as runner
+    from synthgen.cli import main
+
+    src = tmp_path / "s.yaml"
+    src.write_text(SKY_CAR.format(version=2, exposure="", extra="outputs: [rgb_exr, instance]"))
+    out = tmp_path / "ds"
+    s = runner.run(str(src), str(out), count=1, progress=False, journal=True)
+    assert s["rendered"] == 1 and not s["failures"], s.text()
+    meta = json.load(open(out / "meta" / "000000.json"))
+    assert main(["replay", str(out / "journals" / "000000.journal"), "-o", str(tmp_path / "r")]) == 0
+    frame = oiio.ImageBuf(str(out / "images" / "000000.exr")).get_pixels(oiio.FLOAT)[..., :3]
+    replayed = oiio.ImageBuf(str(tmp_path / "r" / "rgb.exr")).get_pixels(oiio.FLOAT)[..., :3]
+    assert np.array_equal(frame, replayed)
+    r = json.load(open(tmp_path / "r" / "meta.json"))
+    assert r["exposure"]["factor"] == pytest.approx(meta["exposure"]["factor"], rel=1e-6)
 
 
 # -- the format -----------------------------------------------------------------------------------

@@ -25,12 +25,13 @@ def run(args: argparse.Namespace) -> int:
     settings.update(overrides(args))
     out_dir = args.output or os.path.join("out", os.path.splitext(os.path.basename(args.journal))[0])
     meta = {"source": os.path.abspath(args.journal), "objects": [], "lights": []}
-    return render_and_write(scene, settings, meta, out_dir, args.journal)
+    return render_and_write(scene, settings, meta, out_dir, args.journal, expose=True)
 
 
 register(Command("replay", "render a scene's change journal again",
                  "Replay a change journal (a failed frame's DIR/failed/FRAME.journal, `synthgen run --journal`, "
                  "Scene.save_journal) into a fresh scene and render it with the settings of the last render it "
                  "recorded (bit-identical to that render; --spp etc. override), writing the files of `synthgen "
-                 "render`. A journal of a scene with C extensions embeds their sources: --allow-extensions compiles "
+                 "render`, the image times the render's recorded exposure (a frame's camera, weather and post "
+                 "exposure steps). A journal of a scene with C extensions embeds their sources: --allow-extensions compiles "
                  "them.", add_arguments, run, order=32, module=__name__))
