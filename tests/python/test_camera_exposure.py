@@ -252,3 +252,75 @@ def test_version_2_is_the_default_of_nothing_else():
     """A scenario without version is version 1 (every scenario written before version 2)."""
     sc = parse_scenario(parse_yaml("objects: [{class: a, primitive: box}]\n"), "s.yaml", os.getcwd())
     assert sc.spec["version"] == 1 and S.sample_frame(sc, 0).camera.exposure["mode"] == "fixed"
+
+
+def test_photo_frames_are_not_exposed_by_the_camera(tmp_path):
+    """Objects inserted into a photo are matched to the photo's light and exposure: a version 2
+    scenario's photo frame is version 1's bit for bit, meta says mode photo. (The "photo" is a
+    render of the empty world, as in test_augmented_photo.py.)"""
+    import synthgen as sg
+    from synthgen import primitives as P
+    from synthgen.background.calibration import Calibration
+
+    w, h = 64, 48
+    cal = dict(width=w, height=h, fx=57.0, fy=57.0, cx=32.0, cy=20.0, camera_height=1.6, pitch=6.0, roll=0.0)
+    s = sg.Scene()
+    g = P.ground()
+    s.add_instance(s.add_mesh(g["positions"], g["indices"], g["normals"], g["uvs"]), np.eye(4, dtype=np.float32),
+                   material_id=s.add_material("diffuse", {"albedo": 0.15}))
+    s.add_light("sky", {"elevation": 35.0, "azimuth": 230.0, "strength": 0.02})
+    s.set_camera(Calibration(**cal).camera())
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    buf = oiio.ImageBuf(oiio.ImageSpec(w, h, 3, oiio.FLOAT))
+    buf.set_pixels(oiio.ROI(), np.ascontiguousarray(np.asarray(s.render(spp=16, seed=1).rgb), np.float32))
+    assert buf.write(str(photos / "street.exr"))
+    (photos / "calibration.yaml").write_text(
+        f"intrinsics: {{fx: {cal['fx']}, cx: {cal['cx']}, cy: {cal['cy']}}}\n"
+        f"ground: {{camera_height: 1.6, pitch: 6.0}}\nsun: {{azimuth: 230.0, elevation: 35.0}}\n"
+        "objects:\n  - {class: box, box: [2, 30, 10, 40]}\n")
+    frames = []
+    for version in (1, 2):
+        text = (f"version: {version}\nseed: 5\nresolution: [{w}, {h}]\n"
+                "background: {photos: [photos], ground_albedo: 0.15, dome: false}\n"
+                "objects: [{class: box, primitive: box, size: [1.6, 1.2, 1.6], "
+                "material: {type: diffuse, albedo: [0.7, 0.1, 0.1]}}]\nrender: {spp: 4}\n")
+        sc = parse_scenario(parse_yaml(text), str(tmp_path / "aug.yaml"), str(tmp_path), text)
+        frames.append(FrameRenderer(sc).render(0))
+    (a, meta_a, _), (b, meta_b, _) = frames
+    assert meta_b["exposure"]["mode"] == "photo" and meta_b["exposure"]["factor"] == 1.0
+    assert meta_a["exposure"]["mode"] == "photo"
+    for k in ("rgb", "instance_id", "depth"):
+        assert np.array_equal(np.asarray(a[k]), np.asarray(b[k]), equal_nan=True), k
+
+
+def test_a_physical_sky_that_nothing_exposes_is_warned_about(tmp_path, capsys):
+    """Version 1 with a sky without strength (white in an 8-bit image) validates and runs with
+    a warning naming the file, line and key; version 2, a strength, a camera.exposure or a
+    night condition (which exposes) need none."""
+    from synthgen.cli import main
+
+    def warnings(version=1, exposure="", extra="", light=None):
+        text = SKY_CAR.format(version=version, exposure=exposure, extra=extra)
+        if light:
+            text = text.replace("{type: sky, elevation: 40, azimuth: 120, turbidity: 3}", light)
+        p = tmp_path / "w.yaml"
+        p.write_text(text)
+        assert main(["validate", str(p)]) == 0
+        return capsys.readouterr().err
+
+    err = warnings()
+    assert f"warning: {tmp_path / 'w.yaml'}:9:10: lights[0]: a sky without strength is at physical scale" in err, err
+    assert "write version: 2" in err
+    assert warnings(version=2) == ""
+    assert warnings(light="{type: sky, elevation: 40, strength: 0.02}") == ""
+    assert warnings(exposure="exposure: {factor: 1}") == ""
+    assert warnings(extra=NIGHT) == ""
+    from synthgen import run as runner
+
+    s = runner.run(str(tmp_path / "w.yaml"), str(tmp_path / "ds"), count=1, progress=False)
+    assert not s["failures"]
+    p = tmp_path / "w.yaml"
+    p.write_text(SKY_CAR.format(version=1, exposure="", extra=""))
+    runner.run(str(p), str(tmp_path / "ds1"), count=1, progress=False)
+    assert "lights[0]: a sky without strength" in capsys.readouterr().err
