@@ -154,6 +154,19 @@ def test_the_image_is_the_render_times_the_recorded_factor():
     assert meta_v1["exposure"]["factor"] == f
 
 
+def test_an_auto_exposed_frame_does_not_depend_on_what_its_worker_rendered_before():
+    """Frame 1 rendered after frames 0 and 2 by the same renderer (pre-passes included) is frame
+    1 rendered alone, bit for bit, its metering too."""
+    fr = FrameRenderer(_scenario(exposure="exposure: {ev: {uniform: [-1, 1]}}"))
+    fr.render(0)
+    fr.render(2)
+    a, meta_a, _ = fr.render(1)
+    b, meta_b, _ = FrameRenderer(_scenario(exposure="exposure: {ev: {uniform: [-1, 1]}}")).render(1)
+    assert meta_a["exposure"] == meta_b["exposure"]
+    for k in ("rgb", "depth", "instance_id"):
+        assert np.array_equal(np.asarray(a[k]), np.asarray(b[k]), equal_nan=True), k
+
+
 def test_a_randomized_exposure_draws_from_its_own_stream():
     """ev as a distribution: recorded under camera.exposure.ev, and every other draw is the
     frame's draw without it."""
