@@ -310,7 +310,8 @@ def test_photo_frames_are_not_exposed_by_the_camera(tmp_path):
 def test_a_physical_sky_that_nothing_exposes_is_warned_about(tmp_path, capsys):
     """Version 1 with a sky without strength (white in an 8-bit image) validates and runs with
     a warning naming the file, line and key; version 2, a strength, a camera.exposure or a
-    night condition (which exposes) need none."""
+    night condition (which exposes) need none. An exposure post step under version 2's default
+    auto-exposure is warned about too."""
     from synthgen.cli import main
 
     def warnings(version=1, exposure="", extra="", light=None):
@@ -329,6 +330,10 @@ def test_a_physical_sky_that_nothing_exposes_is_warned_about(tmp_path, capsys):
     assert warnings(light="{type: sky, elevation: 40, strength: 0.02}") == ""
     assert warnings(exposure="exposure: {factor: 1}") == ""
     assert warnings(extra=NIGHT) == ""
+    # A version 1 hand exposure moved to version 2 would multiply the metered image.
+    err = warnings(version=2, extra="post: [{type: exposure, ev: 8}]")
+    assert "post[0]: an exposure step on top of version 2's auto-exposure" in err, err
+    assert warnings(version=2, exposure="exposure: {mode: auto}", extra="post: [{type: exposure, ev: 1}]") == ""
     from synthgen import run as runner
 
     s = runner.run(str(tmp_path / "w.yaml"), str(tmp_path / "ds"), count=1, progress=False)

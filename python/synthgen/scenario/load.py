@@ -186,11 +186,20 @@ def _check_exposure(spec: Validated, ctx: ValidationContext) -> None:
 def scenario_warnings(spec: Validated, source: str) -> List[str]:
     """Valid but likely not meant: a sky at physical scale (no strength) in a frame that nothing
     exposes (format version 1, no camera.exposure, no exposure step, no dusk or night) is white
-    in an 8-bit image."""
+    in an 8-bit image; an ``exposure`` post step on top of version 2's auto-exposure (a
+    version 1 scenario's hand exposure, moved to version 2) multiplies the metered image."""
     from ..randomize import weather
 
     ex = spec["camera"]["exposure"]
-    if spec["background"] is not None or ex.given or exposure_mode(ex, spec["version"]) != "fixed":
+    if spec["background"] is not None:
+        return []
+    if exposure_mode(ex, spec["version"]) == "auto" and "mode" not in ex.given:
+        return [str(SceneFileError(source, p.loc.line, p.loc.column, p.loc.path,
+                                   "an exposure step on top of version 2's auto-exposure multiplies the metered image "
+                                   "(exposure compensation); a hand exposure (version 1's) is camera.exposure: "
+                                   "{mode: fixed, ev: ...}, compensation of the metered one camera.exposure.ev"))
+                for p in spec["post"] if p["type"] == "exposure"]
+    if ex.given or exposure_mode(ex, spec["version"]) != "fixed":
         return []
     if any(p["type"] == "exposure" for p in spec["post"]):
         return []
