@@ -33,5 +33,5 @@ register(Command("replay", "render a scene's change journal again",
                  "Scene.save_journal) into a fresh scene and render it with the settings of the last render it "
                  "recorded (bit-identical to that render; --spp etc. override), writing the files of `synthgen "
                  "render`, the image times the render's recorded exposure (a frame's camera, weather and post "
-                 "exposure steps). A journal of a scene with C extensions embeds their sources: --allow-extensions compiles "
-                 "them.", add_arguments, run, order=32, module=__name__))
+                 "exposure steps). A journal of a scene with C extensions embeds their sources: --allow-extensions "
+                 "compiles them.", add_arguments, run, order=32, module=__name__))

@@ -24,8 +24,8 @@ SCHEMA = Record({"ev": Number(0.0, min=-20.0, max=20.0, doc="exposure change in 
 
 #: NOTE: the key of auto-exposure, the mid-grey a scene's log-average luminance is mapped to:
 #: 0.18 (18% reflectance grey), E. Reinhard et al., "Photographic Tone Reproduction for Digital
-#: Images", SIGGRAPH 2002, sec. 3.1 ("key value"), and the reflected-light meter calibration of
-#: ISO 2720 (a meter reads an average scene as 12-18% grey).
+#: Images", SIGGRAPH 2002, sec. 3.1 ("key value"; 0.18 their "normal-key" value), as a
+#: reflected-light meter puts an average scene near mid-grey (ISO 2720's calibration, K = 12.5).
 KEY = 0.18
 #: NOTE: Rec. 709 / sRGB luminance weights of linear RGB (ITU-R BT.709-6, item 3.2).
 LUMINANCE = (0.2126, 0.7152, 0.0722)
@@ -60,8 +60,9 @@ def metering_weights(height: int, width: int) -> np.ndarray:
     """Centre-weighted average metering: each pixel's weight, 0.25 + exp(-2 (u^2 + v^2)) with u, v
     its centre's position in [-1, 1] across the image (1.25 at the centre, 0.39 at the middle of
     an edge, 0.27 in a corner): the subject, usually near the centre, counts most, the whole frame
-    still counts (NOTE: the classic 'centre-weighted average' mode of film and digital cameras,
-    e.g. Nikon's, which gives the central circle about 75% of the weight)."""
+    still counts (NOTE: as the 'centre-weighted average' metering mode of cameras, which weighs a
+    central circle most; smooth here, so that the factor does not jump as an object crosses an
+    edge)."""
     u = (np.arange(width, dtype=np.float64) + 0.5) / max(width, 1) * 2.0 - 1.0
     v = (np.arange(height, dtype=np.float64) + 0.5) / max(height, 1) * 2.0 - 1.0
     return 0.25 + np.exp(-2.0 * (v[:, None] ** 2 + u[None, :] ** 2))
