@@ -30,7 +30,7 @@ from ..randomize import weather
 __all__ = ["frame_exposure", "apply_exposure", "PRE_PASS_SCALE", "PRE_PASS_SPP"]
 
 #: The metering pre-pass: 1 / this of the width and height, this many samples per pixel and
-#: at most 4 bounces (night's metering pre-pass does the same): about 1% of a 64-spp frame.
+#: at most 4 bounces (night's metering pre-pass does the same): 1/128 of the samples of a 64-spp frame.
 PRE_PASS_SCALE = 4
 PRE_PASS_SPP = 8
 
