@@ -128,7 +128,10 @@ def say(text: str) -> None:
 
 
 def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str, Any], out_dir: str,
-                      label: str) -> int:
+                      label: str, expose: bool = False) -> int:
+    """Renders ``scene`` with ``settings`` and writes every file of ``synthgen render``;
+    ``expose``: the image written is the render times its ``exposure`` setting (a replayed
+    frame's exposure, as the frame's image was), meta ``exposure`` says by how much."""
     from ..outputs.render import make_meta, write_outputs
     from ..scene.scene_file import validate_render_settings
 
@@ -145,6 +148,15 @@ def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str,
     if stats.get("nan_samples"):
         print(f"warning: {stats['nan_samples']} NaN/infinite samples were discarded", file=sys.stderr)
     meta = make_meta(camera=cam, settings=settings, stats=stats, scene=scene_meta)
+    factor = float(settings.get("exposure", 1.0))
+    if expose and factor != 1.0:
+        import numpy as np
+
+        say(f"exposure: the image x {factor:.9g} (the render's recorded exposure)")
+        meta["exposure"] = {"factor": factor, "from": "the render's exposure setting"}
+        arrays = {k: np.asarray(getattr(result, k)) for k in ("depth", "normal", "albedo", "instance_id", "class_id")}
+        arrays["rgb"] = (np.asarray(result.rgb, np.float32) * np.float32(factor)).astype(np.float32)
+        result = arrays
     paths = write_outputs(out_dir, result, meta)
     for path in paths.values():
         say(f"wrote {path}")

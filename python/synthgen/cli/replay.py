@@ -31,12 +31,13 @@ def run(args: argparse.Namespace) -> int:
     instances = scene.instances()
     meta = {"source": os.path.abspath(args.journal), "objects": [i for i in instances if i["visible"]],
             "hidden_instances": sum(not i["visible"] for i in instances), "lights": scene.lights()}
-    return render_and_write(scene, settings, meta, out_dir, args.journal)
+    return render_and_write(scene, settings, meta, out_dir, args.journal, expose=True)
 
 
 register(Command("replay", "render a scene's change journal again",
                  "Replay a change journal (a failed frame's DIR/failed/FRAME.journal, `synthgen run --journal`, "
                  "Scene.save_journal) into a fresh scene and render it with the settings of the last render it "
                  "recorded (bit-identical to that render; --spp etc. override), writing the files of `synthgen "
-                 "render`. A journal of a scene with C extensions embeds their sources: --allow-extensions compiles "
-                 "them.", add_arguments, run, order=32, module=__name__))
+                 "render`, the image times the render's recorded exposure (a frame's camera, weather and post "
+                 "exposure steps). A journal of a scene with C extensions embeds their sources: --allow-extensions "
+                 "compiles them.", add_arguments, run, order=32, module=__name__))

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from . import Command, register
 from .common import add_extension_option, add_scenario_overrides, scenario_overrides
@@ -26,6 +27,8 @@ def run(args: argparse.Namespace) -> int:
     files = ", ".join(f"{n} {name(k, n)}" for k, n in sorted(checked.items())) or "no input files"
     print(f"{args.scenario}: ok ({sc.count} frames, {sc.resolution[0]}x{sc.resolution[1]}, "
           f"classes: {', '.join(sc.class_names)}; loaded {files})")
+    for w in sc.warnings:  # valid, but likely not meant (a sky nothing exposes)
+        print(f"warning: {w}", file=sys.stderr)
     return 0
 
 

@@ -28,6 +28,7 @@ from ..scenario.schema import RENDER_KEYS
 from ..schema.plugins import realize
 from ..scene import primitives as P
 from ..scene.vehicles import AXES, model_axes
+from .exposure import apply_exposure, frame_exposure
 from .layout import FrameView, search_layout, tilted
 from .lod import amodal_and_levels
 from .records import PlacedObject, frame_camera, level_frame, object_records, weather_labels
@@ -269,10 +270,13 @@ class FrameRenderer:
 
         if rs["denoise"] and fp is not None:  # check_inputs reports it at the YAML key first
             raise SynthgenError("render.denoise is not available with photo backgrounds yet")
-        # The scene's exposure: the post steps' and the weather's own (auto-exposure at night).
+        # The scene's exposure: the post steps', the weather's own (night) and the camera's.
         exposure = exposure_scale(spec.post)
         for c in weather_ctx.values():
             exposure *= c.exposure
+        cam_exposure, exposure_meta = frame_exposure(self, spec.camera.exposure, fp is not None, weather_ctx, camera,
+                                                     render_seed)
+        exposure *= cam_exposure
         c_render = time.process_time()
         res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure,
                                 **{k: rs[k] for k in RENDER_KEYS if k != "threads"})
@@ -303,6 +307,7 @@ class FrameRenderer:
             photo_meta.update(photo_info or {})
         for key, params in spec.weather:  # image-space weather (rain, fog on photos) before the post steps
             arrays = weather.condition(key).post(weather_ctx[key], arrays, params)
+        arrays = apply_exposure(arrays, cam_exposure)
         if spec.post:
             arrays = post.apply_steps(arrays, [(p.type, p.params) for p in spec.post])
         meta = {
@@ -317,6 +322,8 @@ class FrameRenderer:
             # The render's estimated error against its converged image (from its half-sample
             # images; after the scene's exposure): synthgen.post.quality.
             "noise": self._noise(res, exposure),
+            # The camera's exposure (frame.exposure); total: with the weather's and the post steps'.
+            "exposure": {**exposure_meta, "total": exposure},
             # The frame's weather (docs/weather.md): {condition: its parameters}, or none.
             "weather": ({key: {**params, **(weather_ctx[key].extra)} for key, params in spec.weather}
                         if spec.weather else None),

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import glob
 import os
+import sys
 import time
 from typing import Any, Dict, Optional, Sequence, Tuple
 
@@ -97,6 +98,8 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     ``failed/``: ``synthgen replay`` renders it again)."""
     sc = load_scenario(scenario_path, overrides, allow_extensions)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once
+    for w in sc.warnings:              # valid, but likely not meant (a sky nothing exposes)
+        print(f"warning: {w}", file=sys.stderr, flush=True)
     n = int(count) if count is not None else sc.count
     if scheduler is None:  # local workers share this machine's memory
         why = check_memory(*sc.resolution, workers=workers)

@@ -18,14 +18,16 @@ from ..schema import limits
 from ..schema.errors import Loc, SceneFileError, ValidationContext, suggest
 from ..schema.fields import Validated
 from ..schema.yaml_io import parse_yaml, read_text
-from .schema import SCENARIO_SCHEMA
+from .schema import SCENARIO_SCHEMA, exposure_mode
 
-__all__ = ["Scenario", "load_scenario", "parse_scenario", "check_memory"]
+__all__ = ["Scenario", "load_scenario", "parse_scenario", "check_memory", "scenario_warnings"]
 
 
 class Scenario:
     """A validated scenario: ``spec`` (validated tree with distributions), ``source``,
-    ``base_dir``, ``class_names`` (category order: COCO id = index + 1), ``text_sha256``."""
+    ``base_dir``, ``class_names`` (category order: COCO id = index + 1), ``text_sha256``,
+    ``warnings``: what is valid but will not come out as meant (``FILE:LINE:COLUMN: key: why``;
+    ``synthgen validate`` and ``synthgen run`` print them)."""
 
     def __init__(self, spec: Validated, source: str, base_dir: str, text: str):
         self.spec = spec
@@ -42,6 +44,7 @@ class Scenario:
             if cls and cls not in names:
                 names.append(cls)
         self.class_names = names
+        self.warnings: List[str] = scenario_warnings(spec, source)
 
     @property
     def seed(self) -> int:
@@ -161,6 +164,58 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
         if o["rests_on"] is not None and o["pixel_height"] is not None:
             ctx.error(o.locs["pixel_height"], "an object that rests_on another cannot also be placed by pixel_height")
     support_of(spec, ctx)
+    _check_exposure(spec, ctx)
+
+
+def _check_exposure(spec: Validated, ctx: ValidationContext) -> None:
+    """camera.exposure: its keys agree with its mode; none on photo backgrounds."""
+    cam = spec["camera"]
+    ex = cam["exposure"]
+    mode = exposure_mode(ex, spec["version"])
+    if mode == "auto" and "factor" in ex.given:
+        ctx.error(ex.locs["factor"], "a fixed factor with mode: auto (the metered exposure): give mode: fixed, or no "
+                                     "factor (ev compensates the metered exposure)")
+    if mode == "fixed" and "key" in ex.given:
+        ctx.error(ex.locs["key"], "key is auto-exposure's (mode: auto); a fixed exposure is factor (and ev)")
+    if spec["background"] is not None and ex.given:
+        ctx.error(cam.locs.get("exposure", cam.loc), "photo backgrounds take the photo's own exposure (the render is "
+                                                     "matched to the photo's light, meta background.exposure): "
+                                                     "camera.exposure is for synthetic frames; remove it")
+
+
+def scenario_warnings(spec: Validated, source: str) -> List[str]:
+    """Valid but likely not meant: a sky at physical scale (no strength) in a frame that nothing
+    exposes (format version 1, no camera.exposure, no exposure step, no dusk or night) is white
+    in an 8-bit image; an ``exposure`` post step on top of version 2's auto-exposure (a
+    version 1 scenario's hand exposure, moved to version 2) multiplies the metered image."""
+    from ..randomize import weather
+
+    ex = spec["camera"]["exposure"]
+    if spec["background"] is not None:
+        return []
+    if exposure_mode(ex, spec["version"]) == "auto" and "mode" not in ex.given:
+        return [str(SceneFileError(source, p.loc.line, p.loc.column, p.loc.path,
+                                   "an exposure step on top of version 2's auto-exposure multiplies the metered image "
+                                   "(exposure compensation); a hand exposure (version 1's) is camera.exposure: "
+                                   "{mode: fixed, ev: ...}, compensation of the metered one camera.exposure.ev"))
+                for p in spec["post"] if p["type"] == "exposure"]
+    if ex.given or exposure_mode(ex, spec["version"]) != "fixed":
+        return []
+    if any(p["type"] == "exposure" for p in spec["post"]):
+        return []
+    if any(c.exposes and spec["weather"].get(c.key) is not None for c in weather.conditions()):
+        return []
+    lights = spec["lights"]
+    out = []
+    for setup in (lights.options if isinstance(lights, D.Choice) else [lights]):
+        for li in setup:
+            if isinstance(li, Validated) and li.get("type") == "sky" and "strength" not in li.given:
+                out.append(str(SceneFileError(
+                    source, li.loc.line, li.loc.column, li.loc.path,
+                    "a sky without strength is at physical scale (a clear day's sky about 5-15, white in an 8-bit "
+                    "image) and format version 1 leaves the image as rendered: write version: 2 (auto-exposure; "
+                    "docs/scenarios.md#exposure), a camera.exposure, or the sky's strength (0.02: display range)")))
+    return out
 
 
 def support_of(spec: Validated, ctx: Optional[ValidationContext] = None) -> List[Optional[int]]:

@@ -19,7 +19,12 @@ from ..schema import distributions as D
 from ..schema.distributions import frame_rng
 from ..schema.plugins import given_params
 from .load import Scenario, support_of
-from .schema import SHAPE_KEYS
+from .schema import SHAPE_KEYS, exposure_mode
+
+#: The stream of the camera's exposure draws (camera.exposure): its own, so that a randomized
+#: exposure changes no other draw (streams 1-6: layout, camera jitter, render seed, negatives,
+#: photo, photo finish; 7-10: the weather groups; 100 + k: object k).
+EXPOSURE_STREAM = 11
 
 __all__ = ["frame_rng", "sample_frame", "FrameSpec", "ObjectSpec", "PluginSpec", "CameraSpec", "GroundSpec"]
 
@@ -40,11 +45,14 @@ class PluginSpec:
 @dataclass
 class CameraSpec:
     """The sampled camera: vertical field of view or intrinsics (fx, fy, cx, cy as given),
-    and the pose record (``type`` orbit or look_at and its values)."""
+    the pose record (``type`` orbit or look_at and its values) and the exposure: ``mode``
+    (auto or fixed, resolved by the format version), ``key``, ``ev``, ``factor`` (None: 1)."""
 
     fov_y: float
     intrinsics: Dict[str, float]
     pose: Mapping[str, Any]
+    exposure: Mapping[str, Any] = field(default_factory=lambda: {"mode": "fixed", "key": 0.18, "ev": 0.0,
+                                                                 "factor": None})
 
 
 @dataclass
@@ -135,7 +143,7 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
     rng = frame_rng(sc.seed, frame)
     spec = sc.spec
     rec: Dict[str, Any] = {}
-    camera = D.sample_tree(spec["camera"], rng, "camera", rec)
+    camera = D.sample_tree({k: v for k, v in spec["camera"].items() if k != "exposure"}, rng, "camera", rec)
     lights = D.sample_tree(spec["lights"], rng, "lights", rec)
     ground = D.sample_tree(spec["ground"], rng, "ground", rec)
     objects: List[ObjectSpec] = []
@@ -158,9 +166,13 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
     weather_notes: List[str] = []
     weather = sample_weather(spec["weather"], sc.seed, frame, rec, weather_notes)
     intrinsics = {k: float(camera[k]) for k in ("fx", "fy", "cx", "cy") if camera.get(k) is not None}
+    exposure = dict(D.sample_tree(spec["camera"]["exposure"], frame_rng(sc.seed, frame, EXPOSURE_STREAM),
+                                  "camera.exposure", rec))
+    exposure["mode"] = exposure_mode(spec["camera"]["exposure"], spec["version"])
     return FrameSpec(
         frame=int(frame), seed=sc.seed,
-        camera=CameraSpec(fov_y=float(camera["fov_y"]), intrinsics=intrinsics, pose=camera["pose"]),
+        camera=CameraSpec(fov_y=float(camera["fov_y"]), intrinsics=intrinsics, pose=camera["pose"],
+                          exposure=exposure),
         lights=[PluginSpec.of(li) for li in lights],
         ground=GroundSpec(enabled=bool(ground["enabled"]), size=None if ground["size"] is None else float(ground["size"]),
                           material=PluginSpec.of(ground["material"])),

@@ -23,8 +23,9 @@ from ..scene.assets import AXES
 from ..schema.random import R, randomized
 from ..schema.reference import format_schema
 
-__all__ = ["SCENARIO_SCHEMA", "BACKGROUND", "MATERIAL", "LIGHT", "CAMERA", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS",
-           "SHAPE_KEYS", "POST_STEP", "format_scenario_schema"]
+__all__ = ["SCENARIO_SCHEMA", "BACKGROUND", "MATERIAL", "LIGHT", "CAMERA", "EXPOSURE", "FORMAT_VERSION",
+           "exposure_mode", "OBJECT", "PLACEMENT", "RENDER", "RENDER_KEYS", "SHAPE_KEYS", "POST_STEP",
+           "format_scenario_schema"]
 
 #: A material: any material plugin but those made of other materials (``mix``).
 MATERIAL = randomized(plugin_record("material", scenario=True, doc="a material (synthgen plugin name and "
@@ -43,14 +44,48 @@ ORBIT = {"target": R(Vector(3, (0.0, 0.0, 0.0), doc="point looked at")),
 LOOK_AT = {"eye": R(Vector(3, REQUIRED, doc="camera position in metres (world, y up)")),
            "target": R(Vector(3, (0.0, 0.0, 0.0), doc="point looked at"))}
 
-#: The camera plugin's intrinsics (the image size is ``resolution``) and a pose.
+#: The latest scenario format version (``version``): 2 exposes synthetic frames like a camera's
+#: auto-exposure by default; 1 (and a file without ``version``) leaves the image as rendered.
+FORMAT_VERSION = 2
+
+
+def exposure_mode(exposure: Any, version: int) -> str:
+    """The mode of a validated ``camera.exposure``: the given one; else fixed where a factor is
+    given or in format version 1, auto from version 2."""
+    if exposure.get("mode") is not None:
+        return str(exposure["mode"])
+    if exposure.get("factor") is not None or int(version) < 2:
+        return "fixed"
+    return "auto"
+
+
+#: The camera's exposure (synthgen.frame.exposure): the factor the rendered linear image is
+#: multiplied by -- metered like a camera's auto-exposure, or fixed. Not on photo backgrounds
+#: (the render is matched to the photo's own exposure).
+EXPOSURE = Record(
+    {"mode": Choice(["auto", "fixed"], None,
+                    doc="auto: metered like a camera's auto-exposure (a pre-pass at a quarter of the resolution, "
+                        "its centre-weighted log-average luminance mapped to key, highlights protected); fixed: the "
+                        "image x factor; default: auto in format version 2, fixed (factor 1: the image as rendered) "
+                        "in version 1 or when factor is given"),
+     "key": Number(0.18, min=0.001, max=1.0, doc="auto: the log-average luminance the frame is exposed to (0.18 "
+                                                 "mid-grey)"),
+     "ev": R(Number(0.0, min=-20.0, max=20.0, doc="exposure compensation in stops: the image x 2^ev on top of the "
+                                                  "metered (auto) or fixed factor")),
+     "factor": R(Number(None, min=0.0, min_open=True, doc="fixed: the image x this (default 1)"))},
+    default=EMPTY,
+    doc="the camera's exposure of synthetic frames (docs/scenarios.md#exposure); photo backgrounds take the "
+        "photo's")
+
+#: The camera plugin's intrinsics (the image size is ``resolution``), a pose and an exposure.
 CAMERA = randomized(settings_record("camera", "pinhole", scenario=True, keys=("fov_y", "fx", "fy", "cx", "cy"),
                                     default=EMPTY, doc="camera")).extend(
     {"pose": Record({"type": Choice(["orbit", "look_at"], "orbit",
                                     doc="orbit: around a target at a distance, elevation and azimuth; look_at: from "
                                         "an eye point")}, tag="type",
                     variants={"orbit": ORBIT, "look_at": LOOK_AT}, default=EMPTY,
-                    doc="where the camera is and what it looks at (image y points down, world y up)")})
+                    doc="where the camera is and what it looks at (image y points down, world y up)"),
+     "exposure": EXPOSURE})
 
 #: Keys of ``objects[]`` that say what the object is (exactly one is given).
 SHAPE_KEYS = ("primitive", "mesh", "asset") + tuple(r.key for r in randomize.randomizers() if r.shape)
@@ -212,7 +247,9 @@ class _Resolution(Field):
 
 
 SCENARIO_SCHEMA = Record(
-    {"version": Integer(1, min=1, max=1, doc="format version"),
+    {"version": Integer(1, min=1, max=FORMAT_VERSION,
+                        doc="format version: 2 exposes synthetic frames like a camera's auto-exposure by default "
+                            "(camera.exposure); 1 (or none) renders them as before, the image as rendered"),
      "description": String("", doc="free text"),
      "seed": Integer(0, min=0, max=(1 << 63) - 1, doc="scenario seed"),
      "count": Integer(10, min=1, max=10 ** 9, doc="number of frames"),

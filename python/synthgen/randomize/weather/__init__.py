@@ -85,6 +85,9 @@ class Condition:
     order: int = 0
     schema: Record
     doc: str = ""
+    #: True: the condition chooses the frame's exposure itself (its context's ``exposure``: a
+    #: time of day's metering); the camera's auto-exposure then adds only its compensation.
+    exposes: bool = False
 
     def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
         """Checks the scenario's inputs against this condition; ``fail(message)`` reports an

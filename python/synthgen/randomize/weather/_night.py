@@ -180,6 +180,7 @@ class TimeOfDay(Condition):
     """A time of day: the lights, lamps and exposure of dusk or night (module docstring)."""
 
     group = "light"
+    exposes = True
 
     def check(self, value: Mapping[str, Any], spec: Mapping[str, Any], fail: Any, photos: Any = None) -> None:
         if spec.get("background") is not None:
