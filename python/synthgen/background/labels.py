@@ -1,28 +1,45 @@
 """Labels of the real objects a photo already shows, read from the formats users have: labelme
-JSON, COCO JSON, YOLO txt and KITTI label txt, plus boxes and polygons written in a calibration.
+JSON, COCO JSON, YOLO txt, KITTI label txt, CSV (``image,x0,y0,x1,y1[,class]``) and Pascal VOC
+XML, plus boxes and polygons written in a calibration.
 
 A real object is a box (pixels of the photo, x0 y0 x1 y1, continuous coordinates), maybe a
 polygon, a class name (after the calibration's ``classes`` mapping) and ``ignore``: a region the
-detector must not be trained on either way (COCO ``iscrowd``, KITTI ``DontCare``, ``ignore:``
-regions). Real labels are written to every output with ``source: real``."""
+detector must not be trained on either way (COCO ``iscrowd``, KITTI ``DontCare``, VOC
+``difficult``, ``ignore:`` regions). Real labels are written to every output with ``source: real``.
+
+The readers are one public API, for a photo's labels and for whole labelled sets:
+:func:`read_label_file` reads the objects of one image from one file with the file's own class
+names, :func:`label_images` lists the images a file names (every image of a COCO or CSV file),
+:func:`load_labels` applies a calibration's ``classes`` mapping and refuses a file whose classes
+it does not cover, and :func:`check_classes` refuses classes the scenario does not have. Every
+error names the file, the line or index, and the reason; files are read with a size limit, and
+XML without DTDs or entity declarations."""
 from __future__ import annotations
 
+import csv
+import io
 import json
 import math
 import os
-from dataclasses import dataclass
-from typing import Any, Dict, List, Mapping, Optional, Sequence
+from collections import Counter, OrderedDict
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
 from .._core import SynthgenError
 from .formats import MAX_CALIB_BYTES
 
-__all__ = ["RealObject", "read_labels", "LABEL_FORMATS", "polygon_mask", "box_mask", "object_mask", "box_of",
+__all__ = ["RealObject", "LabelFile", "read_label_file", "label_images", "load_labels", "read_labels",
+           "check_classes", "LABEL_FORMATS", "polygon_mask", "box_mask", "object_mask", "box_of",
            "points_in_polygons", "PolygonSet"]
 
-LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti")
+LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc")
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
+#: A VOC file describes one image: a few kilobytes.
+_MAX_VOC_BYTES = 4 * MAX_CALIB_BYTES
+#: Element nesting deeper than this is no VOC file.
+_MAX_XML_DEPTH = 32
 
 
 @dataclass
@@ -30,7 +47,7 @@ class RealObject:
     cls: str                              #: class name (mapped to the scenario's)
     box: Sequence[float]                  #: x0, y0, x1, y1 in photo pixels
     polygon: Optional[np.ndarray] = None  #: N x 2 photo pixels, or None (the box)
-    ignore: bool = False                  #: an ignore region (crowd, DontCare)
+    ignore: bool = False                  #: an ignore region (crowd, DontCare, difficult)
     source: str = ""                      #: file (and line / index) it came from
 
     def meta(self) -> Dict[str, Any]:
@@ -45,16 +62,41 @@ def box_of(points: np.ndarray) -> List[float]:
     return [float(p[:, 0].min()), float(p[:, 1].min()), float(p[:, 0].max()), float(p[:, 1].max())]
 
 
-def _read(path: str, what: str) -> str:
+def _read(path: str, what: str, limit: int = _MAX_LABEL_BYTES) -> str:
     if not os.path.isfile(path):
         raise SynthgenError(f"{path}: {what} not found")
-    if os.path.getsize(path) > _MAX_LABEL_BYTES:
-        raise SynthgenError(f"{path}: a {what} larger than {_MAX_LABEL_BYTES} bytes")
+    if os.path.getsize(path) > limit:
+        raise SynthgenError(f"{path}: a {what} of {os.path.getsize(path)} bytes is larger than the {limit} bytes "
+                            "one can be")
     try:
-        with open(path, "r", encoding="utf-8") as f:
+        with open(path, "r", encoding="utf-8-sig") as f:
             return f.read()
     except (OSError, UnicodeDecodeError) as e:
         raise SynthgenError(f"{path}: cannot read the {what} ({e})") from None
+
+
+#: Parsed multi-image files (COCO, CSV), so that the photos of a folder sharing one file parse it
+#: once: (path, format) -> ((size, mtime), parsed). Parsed data is never modified.
+_PARSED: "OrderedDict[Tuple[str, str], Tuple[Tuple[int, int], Any]]" = OrderedDict()
+
+
+def _cached(path: str, fmt: str, parse) -> Any:
+    key = (os.path.abspath(path), fmt)
+    try:
+        st = os.stat(path)
+        stamp = (st.st_size, st.st_mtime_ns)
+    except OSError:
+        stamp = None
+    hit = _PARSED.get(key)
+    if stamp is not None and hit is not None and hit[0] == stamp:
+        _PARSED.move_to_end(key)
+        return hit[1]
+    value = parse()
+    if stamp is not None:
+        _PARSED[key] = (stamp, value)
+        while len(_PARSED) > 4:
+            _PARSED.popitem(last=False)
+    return value
 
 
 def _json(path: str, what: str) -> Any:
@@ -72,6 +114,18 @@ def _finite_points(pts: Any, where: str) -> np.ndarray:
     if p.ndim != 2 or p.shape[1] != 2 or len(p) < 1 or not np.all(np.isfinite(p)):
         raise SynthgenError(f"{where}: points must be [[x, y], ...] finite numbers")
     return p
+
+
+def _file_name(image: str) -> str:
+    """The file name of an image path written on any system (``dir\\a.jpg`` too)."""
+    return str(image).replace("\\", "/").rsplit("/", 1)[-1]
+
+
+def _same_image(written: str, image: str) -> bool:
+    """Whether a label file's image name is ``image``: by file name, else (one or the other
+    without an extension, or another one) by stem."""
+    a, b = _file_name(written), _file_name(image)
+    return a == b or os.path.splitext(a)[0] == os.path.splitext(b)[0]
 
 
 def _labelme(path: str, photo: str, size) -> List[RealObject]:
@@ -99,13 +153,18 @@ def _labelme(path: str, photo: str, size) -> List[RealObject]:
     return out
 
 
-def _coco(path: str, photo: str, size) -> List[RealObject]:
+def _coco_file(path: str) -> Dict[str, Any]:
     d = _json(path, "COCO file")
     if not isinstance(d, dict) or not all(isinstance(d.get(k), list) for k in ("images", "annotations", "categories")):
         raise SynthgenError(f"{path}: not a COCO file (needs images, annotations and categories lists)")
-    name = os.path.basename(photo)
+    return d
+
+
+def _coco(path: str, photo: str, size) -> List[RealObject]:
+    d = _cached(path, "coco", lambda: _coco_file(path))
+    name = _file_name(photo)
     image = next((im for im in d["images"] if isinstance(im, dict)
-                  and os.path.basename(str(im.get("file_name", ""))) == name), None)
+                  and _file_name(str(im.get("file_name", ""))) == name), None)
     if image is None:
         raise SynthgenError(f"{path}: no image with file_name '{name}'")
     _check_size(path, image.get("width"), image.get("height"), size)
@@ -131,9 +190,8 @@ def _coco(path: str, photo: str, size) -> List[RealObject]:
 
 
 def _yolo(path: str, photo: str, size, names: Optional[Sequence[str]]) -> List[RealObject]:
-    if not names:
-        raise SynthgenError(f"{path}: YOLO labels need the class names ('names' in the labels entry, in the "
-                            "order of the class indices)")
+    if size is None:
+        raise SynthgenError(f"{path}: YOLO labels are fractions of the image's size: it must be known")
     w, h = size
     out = []
     for n, line in enumerate(_read(path, "YOLO label file").splitlines(), 1):
@@ -145,11 +203,18 @@ def _yolo(path: str, photo: str, size, names: Optional[Sequence[str]]) -> List[R
             v = [float(x) for x in parts[1:5]]
         except (ValueError, IndexError):
             raise SynthgenError(f"{path}:{n}: expected 'class cx cy w h', got '{line.strip()[:60]}'") from None
-        if len(v) != 4 or not all(math.isfinite(x) for x in v) or not 0 <= c < len(names):
-            raise SynthgenError(f"{path}:{n}: expected 'class cx cy w h' with class in 0..{len(names) - 1}")
+        if len(v) != 4 or not all(math.isfinite(x) for x in v) or c < 0 or (names and c >= len(names)):
+            span = f" with class in 0..{len(names) - 1}" if names else ""
+            raise SynthgenError(f"{path}:{n}: expected 'class cx cy w h'{span}, got '{line.strip()[:60]}'")
+        if not all(0.0 <= x <= 1.0 for x in v) or v[2] <= 0.0 or v[3] <= 0.0:
+            raise SynthgenError(
+                f"{path}:{n}: YOLO's cx cy w h are fractions of the image's width and height, in [0, 1] (w and h "
+                f"above 0), got '{line.strip()[:60]}' (pixel coordinates? divide x and w by the width {w}, "
+                f"y and h by the height {h})")
         cx, cy, bw, bh = v
-        out.append(RealObject(str(names[c]), [(cx - bw / 2) * w, (cy - bh / 2) * h, (cx + bw / 2) * w,
-                                              (cy + bh / 2) * h], None, False, f"{path}:{n}"))
+        out.append(RealObject(str(names[c]) if names else str(c),
+                              [(cx - bw / 2) * w, (cy - bh / 2) * h, (cx + bw / 2) * w, (cy + bh / 2) * h],
+                              None, False, f"{path}:{n}"))
     return out
 
 
@@ -170,39 +235,314 @@ def _kitti(path: str, photo: str, size) -> List[RealObject]:
     return out
 
 
+#: Header names a CSV file's four box columns may have (any case), all meaning x0, y0, x1, y1.
+_CSV_BOX_HEADERS = (("x0", "y0", "x1", "y1"), ("xmin", "ymin", "xmax", "ymax"), ("x_min", "y_min", "x_max", "y_max"),
+                    ("x1", "y1", "x2", "y2"), ("left", "top", "right", "bottom"))
+
+
+def _number(s: str) -> Optional[float]:
+    try:
+        v = float(s)
+    except ValueError:
+        return None
+    return v if math.isfinite(v) else None
+
+
+def _csv_file(path: str) -> List[Tuple[int, str, List[float], Optional[str]]]:
+    """(line, image, box, class or None) per row of a CSV label file."""
+    text = _read(path, "CSV label file")
+    reader = csv.reader(io.StringIO(text, newline=""))
+    rows: List[Tuple[int, str, List[float], Optional[str]]] = []
+    first = True
+    try:
+        for row in reader:
+            n = reader.line_num
+            row = [c.strip() for c in row]
+            if not any(row):
+                continue
+            if first and len(row) >= 2 and _number(row[1]) is None:
+                first = False
+                names = tuple(c.lower() for c in row[1:5])
+                if len(row) not in (5, 6) or names not in _CSV_BOX_HEADERS:
+                    raise SynthgenError(
+                        f"{path}:{n}: the header '{','.join(row)[:80]}' is not image,x0,y0,x1,y1[,class] (box "
+                        f"columns named {' or '.join(','.join(h) for h in _CSV_BOX_HEADERS)}: corners, not a "
+                        "width and height)")
+                continue
+            first = False
+            if len(row) not in (5, 6):
+                raise SynthgenError(f"{path}:{n}: expected image,x0,y0,x1,y1[,class], got {len(row)} columns: "
+                                    f"'{','.join(row)[:80]}'")
+            box = [_number(c) for c in row[1:5]]
+            if not row[0] or any(v is None for v in box):
+                raise SynthgenError(f"{path}:{n}: expected an image name and four finite numbers x0,y0,x1,y1, got "
+                                    f"'{','.join(row)[:80]}'")
+            if not (box[2] > box[0] and box[3] > box[1]):
+                raise SynthgenError(f"{path}:{n}: x1 must be greater than x0 and y1 than y0 (corners of a box), got "
+                                    f"'{','.join(row)[:80]}'")
+            rows.append((n, row[0], box, (row[5] or None) if len(row) == 6 else None))
+    except csv.Error as e:
+        raise SynthgenError(f"{path}:{reader.line_num}: not CSV ({e})") from None
+    return rows
+
+
+def _csv_rows_of(path: str, rows, photo: str) -> list:
+    name = _file_name(photo)
+    exact = [r for r in rows if _file_name(r[1]) == name]
+    if exact:
+        return exact
+    mine = [r for r in rows if _same_image(r[1], name)]
+    if len({_file_name(r[1]) for r in mine}) > 1:
+        raise SynthgenError(f"{path}: rows of several images match '{name}' by its stem: "
+                            f"{', '.join(sorted({_file_name(r[1]) for r in mine}))}")
+    if not mine:
+        images = list(OrderedDict.fromkeys(r[1] for r in rows))
+        raise SynthgenError(f"{path}: no row for image '{name}' (the file has boxes of {len(images)} images: "
+                            f"{', '.join(images[:3])}{', ...' if len(images) > 3 else ''}); a photo without real "
+                            "objects declares 'objects: []' instead")
+    return mine
+
+
+def _csv(path: str, photo: str, size, default_class: Optional[str]) -> List[RealObject]:
+    out = []
+    for n, _, box, cls in _csv_rows_of(path, _cached(path, "csv", lambda: _csv_file(path)), photo):
+        if cls is None and default_class is None:
+            raise SynthgenError(f"{path}:{n}: the row has no class (image,x0,y0,x1,y1,class): give the class of the "
+                                "file's boxes (the labels entry's 'class')")
+        out.append(RealObject(cls if cls is not None else str(default_class), list(box), None, False, f"{path}:{n}"))
+    return out
+
+
+class _Element:
+    """An XML element with the line it starts on."""
+
+    __slots__ = ("tag", "line", "children", "text")
+
+    def __init__(self, tag: str, line: int):
+        self.tag, self.line, self.children, self.text = tag, line, [], ""
+
+    def find(self, tag: str) -> Optional["_Element"]:
+        return next((c for c in self.children if c.tag == tag), None)
+
+    def findall(self, tag: str) -> List["_Element"]:
+        return [c for c in self.children if c.tag == tag]
+
+
+def _xml(path: str, what: str) -> _Element:
+    """The root of a small XML file: expat with DTDs (and so entity declarations: no entity
+    expansion bombs, no external entities) refused, nesting bounded."""
+    from xml.parsers import expat
+
+    text = _read(path, what, _MAX_VOC_BYTES)
+    p = expat.ParserCreate()
+    p.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    stack: List[_Element] = []
+    root: List[_Element] = []
+
+    def refuse(*_a):
+        raise SynthgenError(f"{path}:{p.CurrentLineNumber}: a {what} with a DTD or entity declarations is refused")
+
+    def start(tag, _attrs):
+        if len(stack) >= _MAX_XML_DEPTH:
+            raise SynthgenError(f"{path}:{p.CurrentLineNumber}: elements nested deeper than {_MAX_XML_DEPTH}")
+        e = _Element(tag, p.CurrentLineNumber)
+        (stack[-1].children if stack else root).append(e)
+        stack.append(e)
+
+    def end(_tag):
+        stack.pop()
+
+    def chars(data):
+        if stack and len(stack[-1].text) < 4096:
+            stack[-1].text += data
+
+    p.StartDoctypeDeclHandler = refuse
+    p.EntityDeclHandler = refuse
+    p.UnparsedEntityDeclHandler = refuse
+    p.ExternalEntityRefHandler = refuse
+    p.StartElementHandler, p.EndElementHandler, p.CharacterDataHandler = start, end, chars
+    try:
+        p.Parse(text, True)
+    except expat.ExpatError as e:
+        raise SynthgenError(f"{path}:{e.lineno}: not XML ({expat.ErrorString(e.code)})") from None
+    return root[0]
+
+
+def _voc(path: str, photo: str, size) -> List[RealObject]:
+    root = _xml(path, "Pascal VOC file")
+    if root.tag != "annotation":
+        raise SynthgenError(f"{path}:{root.line}: not a Pascal VOC file (its root is <{root.tag}>, not <annotation>)")
+    fn = root.find("filename")
+    if fn is not None and fn.text.strip() and not _same_image(fn.text.strip(), photo):
+        raise SynthgenError(f"{path}:{fn.line}: its labels are for image '{fn.text.strip()}', the photo is "
+                            f"'{_file_name(photo)}'")
+    sz = root.find("size")
+    if sz is not None:
+        dims = [sz.find(k) for k in ("width", "height")]
+        if all(d is not None for d in dims):
+            try:
+                w, h = (int(d.text.strip()) for d in dims)
+            except ValueError:
+                raise SynthgenError(f"{path}:{sz.line}: size: width and height must be whole numbers") from None
+            if w > 0 and h > 0:  # some tools write 0 x 0
+                _check_size(path, w, h, size)
+    out = []
+    for ob in root.findall("object"):
+        where = f"{path}:{ob.line}"
+        name, bb = ob.find("name"), ob.find("bndbox")
+        if name is None or not name.text.strip() or bb is None:
+            raise SynthgenError(f"{where}: an <object> needs a <name> and a <bndbox>")
+        v = []
+        for k in ("xmin", "ymin", "xmax", "ymax"):
+            e = bb.find(k)
+            x = None if e is None else _number(e.text.strip())
+            if x is None:
+                raise SynthgenError(f"{path}:{(e or bb).line}: bndbox: {k} must be a finite number")
+            v.append(x)
+        if not (v[2] >= v[0] and v[3] >= v[1]):
+            raise SynthgenError(f"{path}:{bb.line}: bndbox: xmax must be at least xmin and ymax at least ymin, got "
+                                f"{v}")
+        diff = ob.find("difficult")
+        difficult = diff is not None and diff.text.strip() not in ("", "0")
+        # NOTE: VOC's coordinates are 1-based pixel indices, inclusive (xmin 1, xmax W: the whole
+        # width), as the devkit and detectron2 read them: corners xmin - 1 and xmax.
+        out.append(RealObject(name.text.strip(), [v[0] - 1.0, v[1] - 1.0, v[2], v[3]], None, difficult, where))
+    return out
+
+
 def _check_size(path: str, w: Any, h: Any, size) -> None:
     if isinstance(w, int) and isinstance(h, int) and size is not None and (w, h) != tuple(size):
         raise SynthgenError(f"{path}: its labels are for a {w} x {h} image, the photo is {size[0]} x {size[1]}")
 
 
-def read_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping[str, Optional[str]]] = None,
-                names: Optional[Sequence[str]] = None) -> List[RealObject]:
-    """The real objects of ``photo`` (its ``size`` = (width, height)) in label file ``path`` of
-    format ``fmt``. ``classes`` maps the file's class names to the scenario's (a name mapped
-    to None, or a name absent when ``classes`` is given, is dropped; KITTI's DontCare stays as
-    an ignore region)."""
+def read_label_file(path: str, fmt: str, image: str, size: Optional[Sequence[int]] = None,
+                    names: Optional[Sequence[str]] = None, default_class: Optional[str] = None) -> List[RealObject]:
+    """The objects of image ``image`` (a path or file name; its ``size`` = (width, height) when
+    known: YOLO needs it, the others check it where the file states one) in label file ``path`` of
+    format ``fmt``, with the file's own class names: KITTI's type column, COCO's category names,
+    labelme's labels, VOC's names, a CSV's class column (``default_class`` for rows without one),
+    YOLO's ``names[index]`` (the index itself without ``names``). Multi-image files (COCO, CSV)
+    find the image's rows by file name (CSV: else by stem); an image a COCO or CSV file does not
+    name is an error. Ignore regions (``ignore``): COCO ``iscrowd``, KITTI ``DontCare``, VOC
+    ``difficult``."""
     if fmt not in LABEL_FORMATS:
         raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
     if fmt == "labelme":
-        objs = _labelme(path, photo, size)
-    elif fmt == "coco":
-        objs = _coco(path, photo, size)
-    elif fmt == "yolo":
-        objs = _yolo(path, photo, size, names)
-    else:
-        objs = _kitti(path, photo, size)
+        return _labelme(path, image, size)
+    if fmt == "coco":
+        return _coco(path, image, size)
+    if fmt == "yolo":
+        return _yolo(path, image, size, names)
+    if fmt == "kitti":
+        return _kitti(path, image, size)
+    if fmt == "csv":
+        return _csv(path, image, size, default_class)
+    return _voc(path, image, size)
+
+
+def label_images(path: str, fmt: str) -> List[str]:
+    """The images label file ``path`` names, as written there: every image of a COCO file and
+    every image of a CSV file (in order of first appearance), labelme's ``imagePath``, VOC's
+    ``filename``; none for YOLO and KITTI (a file per image, named after it)."""
+    if fmt not in LABEL_FORMATS:
+        raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
+    if fmt == "coco":
+        return [str(im.get("file_name", "")) for im in _cached(path, "coco", lambda: _coco_file(path))["images"]
+                if isinstance(im, dict)]
+    if fmt == "csv":
+        return list(OrderedDict.fromkeys(r[1] for r in _cached(path, "csv", lambda: _csv_file(path))))
+    if fmt == "labelme":
+        d = _json(path, "labelme file")
+        return [str(d["imagePath"])] if isinstance(d, dict) and d.get("imagePath") else []
+    if fmt == "voc":
+        fn = _xml(path, "Pascal VOC file").find("filename")
+        return [fn.text.strip()] if fn is not None and fn.text.strip() else []
+    return []
+
+
+def _show_mapping(classes: Optional[Mapping[str, Optional[str]]]) -> str:
     if classes is None:
-        return objs
-    out = []
+        return "no classes mapping: the file's names are taken as the scenario's"
+    return "classes: {" + ", ".join(f"{k}: {'null' if v is None else v}" for k, v in classes.items()) + "}"
+
+
+@dataclass
+class LabelFile:
+    """One label file read for one photo: its classes and the objects they map to."""
+
+    path: str
+    format: str
+    classes: Optional[Mapping[str, Optional[str]]]   #: the calibration's mapping (None: the file's names)
+    found: Dict[str, int] = field(default_factory=dict)   #: the file's classes for the photo -> objects
+    objects: List[RealObject] = field(default_factory=list)   #: after the mapping
+
+    def describe(self) -> str:
+        found = ", ".join(f"{c} ({n})" for c, n in self.found.items()) or "none"
+        return f"classes found in it: {found}; {_show_mapping(self.classes)}"
+
+
+def load_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping[str, Optional[str]]] = None,
+                names: Optional[Sequence[str]] = None, default_class: Optional[str] = None) -> LabelFile:
+    """The real objects of ``photo`` in a calibration's labels entry: :func:`read_label_file`,
+    then ``classes`` (the file's class names -> the scenario's; a name mapped to None is dropped
+    deliberately). Every class of the file's objects must be a key of ``classes`` when one is
+    given, or the file is refused (a name not listed, ``car`` for KITTI's ``Car``, would drop
+    real objects silently); ignore regions (DontCare, crowd, difficult) not listed stay ignore
+    regions."""
+    if fmt == "yolo" and not names:
+        raise SynthgenError(f"{path}: YOLO labels need the class names ('names' in the labels entry, in the "
+                            "order of the class indices)")
+    objs = read_label_file(path, fmt, photo, size, names, default_class)
+    lf = LabelFile(path, fmt, None if classes is None else dict(classes), dict(Counter(o.cls for o in objs)))
+    if classes is None:
+        lf.objects = objs
+        return lf
+    unlisted = list(OrderedDict.fromkeys(o.cls for o in objs if not o.ignore and o.cls not in classes))
+    if unlisted:
+        hints = []
+        for c in unlisted:
+            near = [k for k in classes if k.lower() == c.lower()]
+            if near:
+                hints.append(f"'{c}' is not '{near[0]}': class names are case-sensitive")
+        raise SynthgenError(
+            f"{path}: {_file_name(photo)}: the class{'es' if len(unlisted) > 1 else ''} "
+            f"{', '.join(repr(c) for c in unlisted)} of its objects {'are' if len(unlisted) > 1 else 'is'} not in the "
+            f"labels' classes mapping ({lf.describe()}){'; ' + '; '.join(hints) if hints else ''}. Map every class "
+            "the file has to a scenario class, or to null to drop its objects deliberately")
     for o in objs:
-        if o.ignore and o.cls not in classes:
-            out.append(o)
-            continue
-        mapped = classes.get(o.cls)
-        if mapped is not None:
-            o.cls = str(mapped)
-            out.append(o)
-    return out
+        if o.cls not in classes:  # an ignore region the mapping does not name
+            lf.objects.append(o)
+        elif classes[o.cls] is not None:
+            lf.objects.append(RealObject(str(classes[o.cls]), o.box, o.polygon, o.ignore, o.source))
+    return lf
+
+
+def read_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping[str, Optional[str]]] = None,
+                names: Optional[Sequence[str]] = None, default_class: Optional[str] = None) -> List[RealObject]:
+    """The objects of :func:`load_labels`."""
+    return load_labels(path, fmt, photo, size, classes, names, default_class).objects
+
+
+def check_classes(files: Sequence[LabelFile], objects: Sequence[RealObject], class_names: Sequence[str],
+                  photo: str) -> None:
+    """Refuses real objects of a class the scenario does not have (they would be left out of
+    every output): a label file's mapping to such a class, or its objects' classes with no
+    mapping, and the calibration's own ``objects``. Ignore regions are free text."""
+    names = list(class_names)
+    for lf in files:
+        bad = list(OrderedDict.fromkeys([v for v in (lf.classes or {}).values() if v is not None and v not in names]
+                                        + [o.cls for o in lf.objects if not o.ignore and o.cls not in names]))
+        if bad:
+            raise SynthgenError(
+                f"{lf.path}: {_file_name(photo)}: {', '.join(repr(c) for c in bad)} {'are' if len(bad) > 1 else 'is'} "
+                f"not a class of the scenario ({', '.join(names)}): its real objects would be left out of the labels "
+                f"({lf.describe()}). "
+                "Map the file's classes to the scenario's, or to null to drop their objects deliberately")
+    from_files = {id(o) for lf in files for o in lf.objects}
+    for o in objects:
+        if not o.ignore and o.cls not in names and id(o) not in from_files:
+            raise SynthgenError(f"{photo}: the calibration's {o.source}: class '{o.cls}' is not a class of the "
+                                f"scenario ({', '.join(names)}): the real object would be left out of the labels")
 
 
 class PolygonSet:

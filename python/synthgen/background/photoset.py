@@ -15,7 +15,7 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from .._core import SynthgenError
-from .labels import RealObject
+from .labels import RealObject, check_classes
 from ..scene.assets import file_sha256
 from .photos import Photo, expand_photos, load_photo
 from .sidecar import PhotoSetup, find_calibration_files, read_photo_setup
@@ -199,10 +199,12 @@ class PhotoSet:
 
     def check(self, class_names: List[str]) -> int:
         """Reads every photo and its calibration once (validation); refuses a photo without real
-        labels unless unlabelled_ok. Returns the number of photos."""
+        labels unless unlabelled_ok, and real objects of classes the scenario does not have.
+        Returns the number of photos."""
         for i, path in enumerate(self.paths):
             p = self.photo(i)
             s = self.setup(i, p)
+            check_classes(s.label_files, s.objects, class_names, path)
             if not s.labelled and not self.bg["unlabelled_ok"]:
                 raise SynthgenError(
                     f"{path}: the photo declares no real labels (labels or objects in its calibration): real "

@@ -22,7 +22,7 @@ from ..schema.fields import (REQUIRED, Bool, Choice, Field, FilePath, ListOf, Ma
 from ..schema.yaml_io import MarkedDict, MarkedList, read_yaml
 from .calibration import (Calibration, fov_to_focal, ground_from_horizon, ground_from_plane, sun_from_shadow)
 from .formats import focal_from_exif, read_cityscapes_camera, read_kitti_calib
-from .labels import LABEL_FORMATS, RealObject, box_of, read_labels
+from .labels import LABEL_FORMATS, LabelFile, RealObject, box_of, load_labels
 
 __all__ = ["CALIBRATION_SCHEMA", "PhotoSetup", "find_calibration_files", "read_photo_setup", "FOLDER_FILE"]
 
@@ -54,6 +54,16 @@ class _Horizon(Field):
         if isinstance(value, (list, tuple)) and len(value) == 2:
             return _Points(2).validate(value, loc, ctx)
         ctx.error(loc, f"expected an {self.type_name}, got {show_value(value)}")
+
+
+class _MappedClass(String):
+    """A scenario class a label file's class maps to, or null: that class's objects are dropped
+    deliberately."""
+
+    type_name = "string or null"
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        return None if value is None else super().validate(value, loc, ctx)
 
 
 _INTRINSICS = Record(
@@ -116,10 +126,12 @@ _DEPTH = Record(
 
 _LABELS = Record(
     {"file": String(doc="label file (paths in a folder's file may use {stem} and {name})"),
-     "format": Choice(list(LABEL_FORMATS), doc="labelme, coco, yolo or kitti"),
-     "classes": MapOf(String(None), None, doc="the file's class names -> the scenario's (a name mapped to null, or "
-                                              "not listed, is dropped)"),
-     "names": ListOf(String(), None, doc="yolo: class names in the order of the class indices")},
+     "format": Choice(list(LABEL_FORMATS), doc="labelme, coco, yolo, kitti, csv (image,x0,y0,x1,y1[,class]) or "
+                                               "voc (Pascal VOC XML)"),
+     "classes": MapOf(_MappedClass(None), None, doc="the file's class names -> the scenario's (a name mapped to "
+                                                    "null is dropped; every class the file has must be listed)"),
+     "names": ListOf(String(), None, doc="yolo: class names in the order of the class indices"),
+     "class": String(None, doc="csv: the class of rows without a class column")},
     doc="a file of the photo's real labels")
 
 _OBJECT = Record(
@@ -181,6 +193,7 @@ class PhotoSetup:
     licence: str = ""
     source: str = ""
     files: List[str] = field(default_factory=list)   #: calibration and label files read
+    label_files: List[LabelFile] = field(default_factory=list)   #: the label files, their classes and mapping
 
     def meta(self) -> Dict[str, Any]:
         return {"calibration": self.calibration.meta(), "road_direction": self.road_direction,
@@ -467,7 +480,13 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
     for i, lab in enumerate(r.get("labels") or []):
         path = r.path("labels", lab["file"], f"[{i}].file")
         setup.files.append(path)
-        objs += read_labels(path, lab["format"], photo, (width, height), lab.get("classes"), lab.get("names"))
+        try:
+            lf = load_labels(path, lab["format"], photo, (width, height), lab.get("classes"), lab.get("names"),
+                             lab.get("class"))
+        except SynthgenError as e:  # at the labels entry: the mapping is there
+            r.error("labels", f"[{i}]: {e}")
+        setup.label_files.append(lf)
+        objs += lf.objects
     for i, o in enumerate(r.get("objects") or []):
         poly = o.get("polygon")
         box = list(o["box"]) if o.get("box") is not None else box_of(poly)
