@@ -1,7 +1,8 @@
 """The labels of a photo's real objects (synthgen.background.labels): every reader (labelme,
 COCO, YOLO, KITTI, CSV, Pascal VOC), the errors that keep real cars from vanishing from the labels
 (a classes mapping that misses the file's classes, a mapping to a class the scenario does not
-have, YOLO files in pixels), and bounded reading of malformed files."""
+have, YOLO files in pixels), bounded reading of malformed files, and real boxes a crop cuts to a
+sliver becoming ignore regions."""
 from __future__ import annotations
 
 import json
@@ -303,6 +304,39 @@ def _photo_set(tmp_path, objects, width=200, height=100):
     ps._photos[path] = Photo(path, np.zeros((height, width, 3), np.float32), "0" * 64)
     ps._setups[path] = PhotoSetup(path, cal, objects=objects, labelled=True)
     return ps, path
+
+
+def test_slivers_a_crop_leaves_of_real_boxes_are_ignore_regions(tmp_path, monkeypatch):
+    """The crop [50, 150) x [0, 100) of a 200 x 100 photo: a real box cut to under 4 px wide or
+    high, or to under 25 % of its area, is an ignore region in the frame (written as one), never
+    an object and never left out; what is left of the others is an object."""
+    boxes = {"kept 75%": [40, 10, 80, 50],          # 30 x 40 of 40 x 40 left
+             "3 px wide": [45, 10, 53, 50],          # 3 of 8 px wide left (37.5 % of the area)
+             "25% left": [20, 10, 60, 90],          # 10 of 40 px: exactly 25 %
+             "24.4% left": [19, 10, 60, 90],        # 10 of 41 px
+             "4 px high": [120, 40, 140, 44],       # inside the crop
+             "3.5 px high": [120, 60, 140, 63.5],   # inside the crop, too thin
+             "outside": [0, 0, 30, 30]}             # not in the frame
+    objects = [RealObject(name, box, None, False, name) for name, box in boxes.items()]
+    objects.append(RealObject("crowd", [45, 60, 53, 70], None, True, "ignore cut"))
+    ps, _ = _photo_set(tmp_path, objects)
+    monkeypatch.setattr(PhotoSet, "_crop", staticmethod(lambda *a: (50, 0)))
+    fp = ps.frame(0, (100, 100), np.random.default_rng(0), 1.0)
+    assert fp.crop == (50, 0, 100, 100)
+    got = {o.source: (o.ignore, [float(v) for v in o.box]) for o in fp.objects}
+    assert got == {"kept 75%": (False, [0, 10, 30, 50]), "3 px wide": (True, [0, 10, 3, 50]),
+                   "25% left": (False, [0, 10, 10, 90]), "24.4% left": (True, [0, 10, 10, 90]),
+                   "4 px high": (False, [70, 40, 90, 44]), "3.5 px high": (True, [70, 60, 90, 63.5]),
+                   "ignore cut": (True, [0, 60, 3, 70])}
+    recs = {r["from"]: r for r in real_object_records(fp, np.zeros((100, 100), np.int32),
+                                                      [o.cls for o in objects])}
+    assert set(recs) == set(got)
+    for src, (ignore, box) in got.items():
+        r = recs[src]
+        assert (r["ignore"], r["bbox"]) == (ignore, box)
+        cls = next(o.cls for o in objects if o.source == src)
+        # An ignore region: class None, and what it was.
+        assert (r["class"], r.get("what")) == ((None, cls) if ignore else (cls, None))
 
 
 @pytest.mark.skipif(not os.path.isdir(os.path.join(SHARED, "realdata", "cars_highway")),

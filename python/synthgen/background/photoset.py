@@ -24,6 +24,10 @@ __all__ = ["PhotoSet", "FramePhoto", "resize_linear", "read_depth", "nearest_cro
 
 #: A depth map file larger than this is refused before it is read.
 MAX_DEPTH_BYTES = 1 << 30
+#: A real box the crop cuts to less than this many pixels wide or high, or to less than this
+#: share of its area, is an ignore region in the frame: too little is left to learn it from.
+MIN_REAL_CUT_PIXELS = 4.0
+MIN_REAL_CUT_SHARE = 0.25
 
 
 def read_depth(setup: PhotoSetup, width: int, height: int) -> np.ndarray:
@@ -102,7 +106,8 @@ class FramePhoto:
     crop: Tuple[int, int, int, int]    #: x0, y0, width, height in scaled pixels
     pixels: np.ndarray                 #: the crop, H x W x 3 linear
     calibration: Any                   #: Calibration of the scaled photo
-    objects: List[RealObject]          #: real objects, boxes in crop pixels (clipped; polygons shifted)
+    objects: List[RealObject]          #: real objects, boxes in crop pixels (clipped; polygons shifted;
+                                       #: slivers the crop leaves are ignore regions)
     regions: List[np.ndarray]          #: placement polygons in crop pixels
     depth: Optional[np.ndarray] = None      #: the photo's metric depth in the crop (+inf: unknown)
     occluders: Optional[np.ndarray] = None  #: real things in front of everything inserted (crop)
@@ -264,7 +269,10 @@ class PhotoSet:
             if clipped[2] <= clipped[0] or clipped[3] <= clipped[1]:
                 continue  # outside the crop
             poly = None if o.polygon is None else np.asarray(o.polygon) * [sx, sy] - [x0, y0]
-            objects.append(RealObject(o.cls, clipped, poly, o.ignore, o.source))
+            cw, ch = clipped[2] - clipped[0], clipped[3] - clipped[1]
+            sliver = (cw < MIN_REAL_CUT_PIXELS or ch < MIN_REAL_CUT_PIXELS or
+                      cw * ch < MIN_REAL_CUT_SHARE * (bx[2] - bx[0]) * (bx[3] - bx[1]))
+            objects.append(RealObject(o.cls, clipped, poly, o.ignore or sliver, o.source))
             objects[-1].full_box = [float(v) for v in bx]  # type: ignore[attr-defined]
         regions = [np.asarray(p) * [sx, sy] - [x0, y0] for p in setup.regions]
         fp = FramePhoto(i, photo, setup, scale, (x0, y0, w, h),
