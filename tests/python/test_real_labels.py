@@ -199,6 +199,9 @@ def test_csv_labels(tmp_path):
                                                r"img/a.jpg, b.jpg\); a photo without real objects declares 'objects: "
                                                r"\[\]' instead"):
         read_label_file(str(c), "csv", "z.jpg", default_class="car")
+    (tmp_path / "two.csv").write_text("train/a.jpg,1,2,3,4\nval/a.jpg,5,6,7,8\n")
+    with pytest.raises(sg.SynthgenError, match=r"two.csv: rows of several images match 'a.jpg': train/a.jpg, val/a.jpg"):
+        read_label_file(str(tmp_path / "two.csv"), "csv", "a.jpg", default_class="car")
     c2 = tmp_path / "classes.csv"
     c2.write_text("a.jpg,1,2,3,4,Car\na.jpg,5,6,7,8,van\n")
     lf = load_labels(str(c2), "csv", "a.jpg", (10, 10), {"Car": "car", "van": None})
@@ -228,9 +231,14 @@ def test_a_huge_label_file_is_refused_before_it_is_read(tmp_path):
 
     c = tmp_path / "huge.csv"
     with open(c, "wb") as f:
-        f.truncate(labels._MAX_LABEL_BYTES + 1)
+        f.truncate(labels._MAX_CSV_BYTES + 1)
     with pytest.raises(sg.SynthgenError, match=r"huge.csv: a CSV label file of \d+ bytes is larger than"):
         read_label_file(str(c), "csv", "a.jpg")
+    c.write_text("a.jpg,1,2,3,4\n" * (labels._MAX_OBJECTS + 1) + "b.jpg,1,2,3,4\n")
+    with pytest.raises(sg.SynthgenError, match=rf"huge.csv: {labels._MAX_OBJECTS + 1} boxes for image 'a.jpg', more "
+                                               rf"than the {labels._MAX_OBJECTS} one image can have"):
+        read_label_file(str(c), "csv", "a.jpg", default_class="car")
+    assert len(read_label_file(str(c), "csv", "b.jpg", default_class="car")) == 1
     v = tmp_path / "huge.xml"
     with open(v, "wb") as f:
         f.truncate(labels._MAX_VOC_BYTES + 1)

@@ -38,6 +38,10 @@ LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc")
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
 #: A VOC file describes one image: a few kilobytes.
 _MAX_VOC_BYTES = 4 * MAX_CALIB_BYTES
+#: A CSV file of boxes of many images: 16 MiB is about 300000 rows (about 1.2 million short ones).
+_MAX_CSV_BYTES = 16 * MAX_CALIB_BYTES
+#: More boxes than this for one image are refused (a CSV file of one image's boxes).
+_MAX_OBJECTS = 20000
 #: Element nesting deeper than this is no VOC file.
 _MAX_XML_DEPTH = 32
 
@@ -248,11 +252,26 @@ def _number(s: str) -> Optional[float]:
     return v if math.isfinite(v) else None
 
 
-def _csv_file(path: str) -> List[Tuple[int, str, List[float], Optional[str]]]:
-    """(line, image, box, class or None) per row of a CSV label file."""
-    text = _read(path, "CSV label file")
+@dataclass
+class _CsvTable:
+    """A CSV label file's rows, compactly (a row costs 52 bytes, not a few hundred)."""
+
+    images: List[str]      #: distinct image names as written, in order of first appearance
+    classes: List[str]     #: distinct class names
+    line: np.ndarray       #: per row: its line in the file
+    image: np.ndarray      #: per row: index into images
+    cls: np.ndarray        #: per row: index into classes, -1 for none
+    box: np.ndarray        #: per row: x0, y0, x1, y1
+
+
+def _csv_file(path: str) -> _CsvTable:
+    from array import array
+
+    text = _read(path, "CSV label file", _MAX_CSV_BYTES)
     reader = csv.reader(io.StringIO(text, newline=""))
-    rows: List[Tuple[int, str, List[float], Optional[str]]] = []
+    images: Dict[str, int] = {}
+    classes: Dict[str, int] = {}
+    line, image, cls, box = array("q"), array("i"), array("i"), array("d")
     first = True
     try:
         for row in reader:
@@ -273,43 +292,47 @@ def _csv_file(path: str) -> List[Tuple[int, str, List[float], Optional[str]]]:
             if len(row) not in (5, 6):
                 raise SynthgenError(f"{path}:{n}: expected image,x0,y0,x1,y1[,class], got {len(row)} columns: "
                                     f"'{','.join(row)[:80]}'")
-            box = [_number(c) for c in row[1:5]]
-            if not row[0] or any(v is None for v in box):
+            v = [_number(c) for c in row[1:5]]
+            if not row[0] or any(x is None for x in v):
                 raise SynthgenError(f"{path}:{n}: expected an image name and four finite numbers x0,y0,x1,y1, got "
                                     f"'{','.join(row)[:80]}'")
-            if not (box[2] > box[0] and box[3] > box[1]):
+            if not (v[2] > v[0] and v[3] > v[1]):
                 raise SynthgenError(f"{path}:{n}: x1 must be greater than x0 and y1 than y0 (corners of a box), got "
                                     f"'{','.join(row)[:80]}'")
-            rows.append((n, row[0], box, (row[5] or None) if len(row) == 6 else None))
+            line.append(n)
+            image.append(images.setdefault(row[0], len(images)))
+            cls.append(classes.setdefault(row[5], len(classes)) if len(row) == 6 and row[5] else -1)
+            box.extend(v)
     except csv.Error as e:
         raise SynthgenError(f"{path}:{reader.line_num}: not CSV ({e})") from None
-    return rows
-
-
-def _csv_rows_of(path: str, rows, photo: str) -> list:
-    name = _file_name(photo)
-    exact = [r for r in rows if _file_name(r[1]) == name]
-    if exact:
-        return exact
-    mine = [r for r in rows if _same_image(r[1], name)]
-    if len({_file_name(r[1]) for r in mine}) > 1:
-        raise SynthgenError(f"{path}: rows of several images match '{name}' by its stem: "
-                            f"{', '.join(sorted({_file_name(r[1]) for r in mine}))}")
-    if not mine:
-        images = list(OrderedDict.fromkeys(r[1] for r in rows))
-        raise SynthgenError(f"{path}: no row for image '{name}' (the file has boxes of {len(images)} images: "
-                            f"{', '.join(images[:3])}{', ...' if len(images) > 3 else ''}); a photo without real "
-                            "objects declares 'objects: []' instead")
-    return mine
+    return _CsvTable(list(images), list(classes), np.frombuffer(line, np.int64), np.frombuffer(image, np.int32),
+                     np.frombuffer(cls, np.int32), np.frombuffer(box, np.float64).reshape(-1, 4))
 
 
 def _csv(path: str, photo: str, size, default_class: Optional[str]) -> List[RealObject]:
+    t: _CsvTable = _cached(path, "csv", lambda: _csv_file(path))
+    name = _file_name(photo)
+    mine = [i for i, im in enumerate(t.images) if _file_name(im) == name] or \
+        [i for i, im in enumerate(t.images) if _same_image(im, name)]
+    if len(mine) > 1:
+        raise SynthgenError(f"{path}: rows of several images match '{name}': "
+                            f"{', '.join(t.images[i] for i in mine[:5])}{', ...' if len(mine) > 5 else ''}")
+    if not mine:
+        raise SynthgenError(f"{path}: no row for image '{name}' (the file has boxes of {len(t.images)} images: "
+                            f"{', '.join(t.images[:3])}{', ...' if len(t.images) > 3 else ''}); a photo without real "
+                            "objects declares 'objects: []' instead")
+    rows = np.flatnonzero(t.image == mine[0])
+    if len(rows) > _MAX_OBJECTS:
+        raise SynthgenError(f"{path}: {len(rows)} boxes for image '{t.images[mine[0]]}', more than the "
+                            f"{_MAX_OBJECTS} one image can have")
     out = []
-    for n, _, box, cls in _csv_rows_of(path, _cached(path, "csv", lambda: _csv_file(path)), photo):
-        if cls is None and default_class is None:
-            raise SynthgenError(f"{path}:{n}: the row has no class (image,x0,y0,x1,y1,class): give the class of the "
-                                "file's boxes (the labels entry's 'class')")
-        out.append(RealObject(cls if cls is not None else str(default_class), list(box), None, False, f"{path}:{n}"))
+    for r in rows.tolist():
+        c = int(t.cls[r])
+        if c < 0 and default_class is None:
+            raise SynthgenError(f"{path}:{t.line[r]}: the row has no class (image,x0,y0,x1,y1,class): give the class "
+                                "of the file's boxes (the labels entry's 'class')")
+        out.append(RealObject(t.classes[c] if c >= 0 else str(default_class), t.box[r].tolist(), None, False,
+                              f"{path}:{t.line[r]}"))
     return out
 
 
@@ -450,7 +473,7 @@ def label_images(path: str, fmt: str) -> List[str]:
         return [str(im.get("file_name", "")) for im in _cached(path, "coco", lambda: _coco_file(path))["images"]
                 if isinstance(im, dict)]
     if fmt == "csv":
-        return list(OrderedDict.fromkeys(r[1] for r in _cached(path, "csv", lambda: _csv_file(path))))
+        return list(_cached(path, "csv", lambda: _csv_file(path)).images)
     if fmt == "labelme":
         d = _json(path, "labelme file")
         return [str(d["imagePath"])] if isinstance(d, dict) and d.get("imagePath") else []
