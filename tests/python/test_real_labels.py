@@ -95,7 +95,8 @@ def test_classes_the_scenario_does_not_have_are_refused(tmp_path):
     check_classes([lf], lf.objects, ["car", "van"], "k.png")  # every class known: no error
     raw = load_labels(str(k), "kitti", "k.png", (200, 100))
     with pytest.raises(sg.SynthgenError, match=r"'Car', 'Pedestrian' are not a class of the scenario \(car\).*no "
-                                               r"classes mapping"):
+                                               r"classes mapping.*\); 'Car' is not 'car': class names are "
+                                               r"case-sensitive\. Map"):
         check_classes([raw], raw.objects, ["car"], "k.png")
     mine = [RealObject("lorry", [0, 0, 5, 5], source="objects[0]")]
     with pytest.raises(sg.SynthgenError, match=r"k.png: the calibration's objects\[0\]: class 'lorry' is not a class "

@@ -489,6 +489,12 @@ def _show_mapping(classes: Optional[Mapping[str, Optional[str]]]) -> str:
     return "classes: {" + ", ".join(f"{k}: {'null' if v is None else v}" for k, v in classes.items()) + "}"
 
 
+def _case_hints(names: Sequence[str], known: Sequence[str]) -> str:
+    """'; 'Car' is not 'car': class names are case-sensitive' for each name known in another case."""
+    hints = [f"'{c}' is not '{k}'" for c in names for k in known if k != c and k.lower() == c.lower()][:3]
+    return f"; {', '.join(hints)}: class names are case-sensitive" if hints else ""
+
+
 @dataclass
 class LabelFile:
     """One label file read for one photo: its classes and the objects they map to."""
@@ -522,15 +528,10 @@ def load_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping
         return lf
     unlisted = list(OrderedDict.fromkeys(o.cls for o in objs if not o.ignore and o.cls not in classes))
     if unlisted:
-        hints = []
-        for c in unlisted:
-            near = [k for k in classes if k.lower() == c.lower()]
-            if near:
-                hints.append(f"'{c}' is not '{near[0]}': class names are case-sensitive")
         raise SynthgenError(
             f"{path}: {_file_name(photo)}: the class{'es' if len(unlisted) > 1 else ''} "
             f"{', '.join(repr(c) for c in unlisted)} of its objects {'are' if len(unlisted) > 1 else 'is'} not in the "
-            f"labels' classes mapping ({lf.describe()}){'; ' + '; '.join(hints) if hints else ''}. Map every class "
+            f"labels' classes mapping ({lf.describe()}){_case_hints(unlisted, list(classes))}. Map every class "
             "the file has to a scenario class, or to null to drop its objects deliberately")
     for o in objs:
         if o.cls not in classes:  # an ignore region the mapping does not name
@@ -559,8 +560,8 @@ def check_classes(files: Sequence[LabelFile], objects: Sequence[RealObject], cla
             raise SynthgenError(
                 f"{lf.path}: {_file_name(photo)}: {', '.join(repr(c) for c in bad)} {'are' if len(bad) > 1 else 'is'} "
                 f"not a class of the scenario ({', '.join(names)}): its real objects would be left out of the labels "
-                f"({lf.describe()}). "
-                "Map the file's classes to the scenario's, or to null to drop their objects deliberately")
+                f"({lf.describe()}){_case_hints(bad, names)}. Map the file's classes to the scenario's, or to null to "
+                "drop their objects deliberately")
     from_files = {id(o) for lf in files for o in lf.objects}
     for o in objects:
         if not o.ignore and o.cls not in names and id(o) not in from_files:
