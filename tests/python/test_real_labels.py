@@ -1,8 +1,8 @@
-"""The labels of a photo's real objects (synthgen.background.labels): every reader (labelme,
-COCO, YOLO, KITTI, CSV, Pascal VOC), the errors that keep real cars from vanishing from the labels
-(a classes mapping that misses the file's classes, a mapping to a class the scenario does not
-have, YOLO files in pixels), bounded reading of malformed files, and real boxes a crop cuts to a
-sliver becoming ignore regions."""
+"""The labels of a photo's real objects (synthgen.background.label_files and .labels): every
+reader (labelme, COCO, YOLO, KITTI, CSV, Pascal VOC), the errors that keep real cars from
+vanishing from the labels (a classes mapping that misses the file's classes, a mapping to a class
+the scenario does not have, YOLO files in pixels), bounded reading of malformed files, and real
+boxes a crop cuts to a sliver becoming ignore regions."""
 from __future__ import annotations
 
 import json
@@ -15,8 +15,8 @@ import pytest
 
 import synthgen as sg
 from synthgen.background.calibration import Calibration
-from synthgen.background.labels import (RealObject, check_classes, label_images, load_labels, read_label_file,
-                                        read_labels)
+from synthgen.background.label_files import RealObject, label_images, read_label_file
+from synthgen.background.labels import check_classes, load_labels, read_labels
 from synthgen.background.photos import Photo
 from synthgen.background.photoset import PhotoSet
 from synthgen.background.sidecar import PhotoSetup, read_photo_setup
@@ -228,7 +228,7 @@ def test_malformed_csv_is_an_error_naming_the_line(tmp_path, text, error):
 
 
 def test_a_huge_label_file_is_refused_before_it_is_read(tmp_path):
-    from synthgen.background import labels
+    from synthgen.background import label_files as labels
 
     c = tmp_path / "huge.csv"
     with open(c, "wb") as f:
