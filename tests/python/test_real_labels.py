@@ -194,6 +194,10 @@ def test_csv_labels(tmp_path):
     assert [(o.cls, o.box, o.source) for o in objs] == [("car", [1.5, 2, 30, 40], f"{c}:2"),
                                                         ("car", [10, 20, 30, 40], f"{c}:5")]
     assert [o.box for o in read_label_file(str(c), "csv", "b.png", default_class="car")] == [[5, 6, 7, 8]]  # stem
+    # A file parsed once for many photos is parsed again when it changes.
+    c.write_text("b.jpg,5,6,70,80\n")
+    assert [o.box for o in read_label_file(str(c), "csv", "b.jpg", default_class="car")] == [[5, 6, 70, 80]]
+    c.write_text("image_id,xmin,ymin,xmax,ymax\nimg/a.jpg,1.5,2,30,40\nb.jpg,5,6,7,8\r\n\nimg/a.jpg,10,20,30,40\n")
     with pytest.raises(sg.SynthgenError, match=r"boxes.csv:2: the row has no class .*the labels entry's 'class'"):
         read_label_file(str(c), "csv", "a.jpg")
     with pytest.raises(sg.SynthgenError, match=r"boxes.csv: no row for image 'z.jpg' \(the file has boxes of 2 images: "

@@ -72,15 +72,19 @@ def _read(path: str, what: str, limit: int = _MAX_LABEL_BYTES) -> str:
 
 
 #: Parsed multi-image files (COCO, CSV), so that the photos of a folder sharing one file parse it
-#: once: (path, format) -> ((size, mtime), parsed). Parsed data is never modified.
-_PARSED: "OrderedDict[Tuple[str, str], Tuple[Tuple[int, int], Any]]" = OrderedDict()
+#: once: (path, format) -> ((inode, size, mtime), parsed). Parsed data is never modified. A COCO
+#: file's parsed JSON takes about ten times its size: only small ones are kept (CSV rows are compact).
+_PARSED: "OrderedDict[Tuple[str, str], Tuple[Tuple[int, int, int], Any]]" = OrderedDict()
+_MAX_KEPT_JSON_BYTES = 8 * MAX_CALIB_BYTES
 
 
 def _cached(path: str, fmt: str, parse) -> Any:
     key = (os.path.abspath(path), fmt)
     try:
         st = os.stat(path)
-        stamp = (st.st_size, st.st_mtime_ns)
+        stamp = (st.st_ino, st.st_size, st.st_mtime_ns)
+        if fmt == "coco" and st.st_size > _MAX_KEPT_JSON_BYTES:
+            stamp = None
     except OSError:
         stamp = None
     hit = _PARSED.get(key)
