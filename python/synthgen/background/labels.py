@@ -1,208 +1,117 @@
-"""Labels of the real objects a photo already shows, read from the formats users have: labelme
-JSON, COCO JSON, YOLO txt and KITTI label txt, plus boxes and polygons written in a calibration.
+"""Labels of the real objects a photo already shows: the objects of its label files
+(:mod:`.label_files`: labelme, COCO, YOLO, KITTI, CSV, Pascal VOC) under its calibration's
+``classes`` mapping, plus boxes and polygons written in a calibration; and the masks of real
+objects.
 
 A real object is a box (pixels of the photo, x0 y0 x1 y1, continuous coordinates), maybe a
 polygon, a class name (after the calibration's ``classes`` mapping) and ``ignore``: a region the
-detector must not be trained on either way (COCO ``iscrowd``, KITTI ``DontCare``, ``ignore:``
-regions). Real labels are written to every output with ``source: real``."""
+detector must not be trained on either way (COCO ``iscrowd``, KITTI ``DontCare``, VOC
+``difficult``, ``ignore:`` regions). Real labels are written to every output with ``source: real``.
+
+Real labels must not vanish on the way: :func:`load_labels` refuses a mapping that does not list
+every class of the file's objects, and :func:`check_classes` classes the scenario does not have;
+each error names the labels file, the classes found in it and the mapping."""
 from __future__ import annotations
 
-import json
 import math
 import os
-from dataclasses import dataclass
-from typing import Any, Dict, List, Mapping, Optional, Sequence
+from collections import Counter, OrderedDict
+from dataclasses import dataclass, field
+from typing import Dict, List, Mapping, Optional, Sequence
 
 import numpy as np
 
 from .._core import SynthgenError
-from .formats import MAX_CALIB_BYTES
+from .label_files import LABEL_FORMATS, RealObject, box_of, read_label_file
 
-__all__ = ["RealObject", "read_labels", "LABEL_FORMATS", "polygon_mask", "box_mask", "object_mask", "box_of",
-           "points_in_polygons", "PolygonSet"]
+__all__ = ["RealObject", "LabelFile", "load_labels", "read_labels", "check_classes", "LABEL_FORMATS",
+           "polygon_mask", "box_mask", "object_mask", "box_of", "points_in_polygons", "PolygonSet"]
 
-LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti")
-_MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
+
+def _show_mapping(classes: Optional[Mapping[str, Optional[str]]]) -> str:
+    if classes is None:
+        return "no classes mapping: the file's names are taken as the scenario's"
+    return "classes: {" + ", ".join(f"{k}: {'null' if v is None else v}" for k, v in classes.items()) + "}"
+
+
+def _case_hints(names: Sequence[str], known: Sequence[str]) -> str:
+    """'; 'Car' is not 'car': class names are case-sensitive' for each name known in another case."""
+    hints = [f"'{c}' is not '{k}'" for c in names for k in known if k != c and k.lower() == c.lower()][:3]
+    return f"; {', '.join(hints)}: class names are case-sensitive" if hints else ""
 
 
 @dataclass
-class RealObject:
-    cls: str                              #: class name (mapped to the scenario's)
-    box: Sequence[float]                  #: x0, y0, x1, y1 in photo pixels
-    polygon: Optional[np.ndarray] = None  #: N x 2 photo pixels, or None (the box)
-    ignore: bool = False                  #: an ignore region (crowd, DontCare)
-    source: str = ""                      #: file (and line / index) it came from
+class LabelFile:
+    """One label file read for one photo: its classes and the objects they map to."""
 
-    def meta(self) -> Dict[str, Any]:
-        d = {"class": self.cls, "box": [float(v) for v in self.box], "ignore": self.ignore, "source": self.source}
-        if self.polygon is not None:
-            d["polygon"] = np.asarray(self.polygon, float).round(2).tolist()
-        return d
+    path: str
+    format: str
+    classes: Optional[Mapping[str, Optional[str]]]   #: the calibration's mapping (None: the file's names)
+    found: Dict[str, int] = field(default_factory=dict)   #: the file's classes for the photo -> objects
+    objects: List[RealObject] = field(default_factory=list)   #: after the mapping
 
-
-def box_of(points: np.ndarray) -> List[float]:
-    p = np.asarray(points, np.float64)
-    return [float(p[:, 0].min()), float(p[:, 1].min()), float(p[:, 0].max()), float(p[:, 1].max())]
+    def describe(self) -> str:
+        found = ", ".join(f"{c} ({n})" for c, n in self.found.items()) or "none"
+        return f"classes found in it: {found}; {_show_mapping(self.classes)}"
 
 
-def _read(path: str, what: str) -> str:
-    if not os.path.isfile(path):
-        raise SynthgenError(f"{path}: {what} not found")
-    if os.path.getsize(path) > _MAX_LABEL_BYTES:
-        raise SynthgenError(f"{path}: a {what} larger than {_MAX_LABEL_BYTES} bytes")
-    try:
-        with open(path, "r", encoding="utf-8") as f:
-            return f.read()
-    except (OSError, UnicodeDecodeError) as e:
-        raise SynthgenError(f"{path}: cannot read the {what} ({e})") from None
-
-
-def _json(path: str, what: str) -> Any:
-    try:
-        return json.loads(_read(path, what))
-    except json.JSONDecodeError as e:
-        raise SynthgenError(f"{path}:{e.lineno}: not JSON ({e.msg})") from None
-
-
-def _finite_points(pts: Any, where: str) -> np.ndarray:
-    try:
-        p = np.asarray(pts, np.float64)
-    except (TypeError, ValueError):
-        raise SynthgenError(f"{where}: points must be [[x, y], ...] numbers") from None
-    if p.ndim != 2 or p.shape[1] != 2 or len(p) < 1 or not np.all(np.isfinite(p)):
-        raise SynthgenError(f"{where}: points must be [[x, y], ...] finite numbers")
-    return p
-
-
-def _labelme(path: str, photo: str, size) -> List[RealObject]:
-    d = _json(path, "labelme file")
-    if not isinstance(d, dict) or not isinstance(d.get("shapes"), list):
-        raise SynthgenError(f"{path}: not a labelme file (no 'shapes' list)")
-    _check_size(path, d.get("imageWidth"), d.get("imageHeight"), size)
-    out = []
-    for i, s in enumerate(d["shapes"]):
-        where = f"{path}: shapes[{i}]"
-        if not isinstance(s, dict) or not isinstance(s.get("label"), str):
-            raise SynthgenError(f"{where}: a shape needs a 'label' and 'points'")
-        p = _finite_points(s.get("points"), where)
-        kind = s.get("shape_type") or "polygon"
-        if kind == "rectangle" and len(p) == 2:
-            box, poly = box_of(p), None
-        elif kind == "circle" and len(p) == 2:
-            r = float(np.hypot(*(p[1] - p[0])))
-            box, poly = [p[0, 0] - r, p[0, 1] - r, p[0, 0] + r, p[0, 1] + r], None
-        elif kind in ("polygon", "linestrip") and len(p) >= 3:
-            box, poly = box_of(p), p
-        else:
-            continue  # points and lines mark no object
-        out.append(RealObject(s["label"], box, poly, False, where))
-    return out
-
-
-def _coco(path: str, photo: str, size) -> List[RealObject]:
-    d = _json(path, "COCO file")
-    if not isinstance(d, dict) or not all(isinstance(d.get(k), list) for k in ("images", "annotations", "categories")):
-        raise SynthgenError(f"{path}: not a COCO file (needs images, annotations and categories lists)")
-    name = os.path.basename(photo)
-    image = next((im for im in d["images"] if isinstance(im, dict)
-                  and os.path.basename(str(im.get("file_name", ""))) == name), None)
-    if image is None:
-        raise SynthgenError(f"{path}: no image with file_name '{name}'")
-    _check_size(path, image.get("width"), image.get("height"), size)
-    cats = {c.get("id"): str(c.get("name")) for c in d["categories"] if isinstance(c, dict)}
-    out = []
-    for i, a in enumerate(d["annotations"]):
-        if not isinstance(a, dict) or a.get("image_id") != image.get("id"):
-            continue
-        where = f"{path}: annotations[{i}]"
-        bb = a.get("bbox")
-        if (not isinstance(bb, list) or len(bb) != 4 or
-                not all(isinstance(v, (int, float)) and math.isfinite(v) for v in bb)):
-            raise SynthgenError(f"{where}: bbox must be [x, y, width, height]")
-        if a.get("category_id") not in cats:
-            raise SynthgenError(f"{where}: category_id {a.get('category_id')!r} is not in categories")
-        poly = None
-        seg = a.get("segmentation")
-        if isinstance(seg, list) and seg and isinstance(seg[0], list) and len(seg[0]) >= 6:
-            poly = _finite_points(np.asarray(seg[0], float).reshape(-1, 2), where)
-        x, y, w, h = (float(v) for v in bb)
-        out.append(RealObject(cats[a["category_id"]], [x, y, x + w, y + h], poly, bool(a.get("iscrowd", 0)), where))
-    return out
-
-
-def _yolo(path: str, photo: str, size, names: Optional[Sequence[str]]) -> List[RealObject]:
-    if not names:
+def load_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping[str, Optional[str]]] = None,
+                names: Optional[Sequence[str]] = None, default_class: Optional[str] = None) -> LabelFile:
+    """The real objects of ``photo`` in a calibration's labels entry: :func:`read_label_file`,
+    then ``classes`` (the file's class names -> the scenario's; a name mapped to None is dropped
+    deliberately). Every class of the file's objects must be a key of ``classes`` when one is
+    given, or the file is refused (a name not listed, ``car`` for KITTI's ``Car``, would drop
+    real objects silently); ignore regions (DontCare, crowd, difficult) not listed stay ignore
+    regions."""
+    if fmt == "yolo" and not names:
         raise SynthgenError(f"{path}: YOLO labels need the class names ('names' in the labels entry, in the "
                             "order of the class indices)")
-    w, h = size
-    out = []
-    for n, line in enumerate(_read(path, "YOLO label file").splitlines(), 1):
-        if not line.strip():
-            continue
-        parts = line.split()
-        try:
-            c = int(parts[0])
-            v = [float(x) for x in parts[1:5]]
-        except (ValueError, IndexError):
-            raise SynthgenError(f"{path}:{n}: expected 'class cx cy w h', got '{line.strip()[:60]}'") from None
-        if len(v) != 4 or not all(math.isfinite(x) for x in v) or not 0 <= c < len(names):
-            raise SynthgenError(f"{path}:{n}: expected 'class cx cy w h' with class in 0..{len(names) - 1}")
-        cx, cy, bw, bh = v
-        out.append(RealObject(str(names[c]), [(cx - bw / 2) * w, (cy - bh / 2) * h, (cx + bw / 2) * w,
-                                              (cy + bh / 2) * h], None, False, f"{path}:{n}"))
-    return out
-
-
-def _kitti(path: str, photo: str, size) -> List[RealObject]:
-    out = []
-    for n, line in enumerate(_read(path, "KITTI label file").splitlines(), 1):
-        parts = line.split()
-        if not parts:
-            continue
-        try:
-            box = [float(x) for x in parts[4:8]]
-        except ValueError:
-            box = []
-        if len(box) != 4 or not all(math.isfinite(x) for x in box):
-            raise SynthgenError(f"{path}:{n}: expected a KITTI label line (type truncated occluded alpha "
-                                f"x0 y0 x1 y1 ...), got '{line.strip()[:60]}'")
-        out.append(RealObject(parts[0], box, None, parts[0] == "DontCare", f"{path}:{n}"))
-    return out
-
-
-def _check_size(path: str, w: Any, h: Any, size) -> None:
-    if isinstance(w, int) and isinstance(h, int) and size is not None and (w, h) != tuple(size):
-        raise SynthgenError(f"{path}: its labels are for a {w} x {h} image, the photo is {size[0]} x {size[1]}")
+    objs = read_label_file(path, fmt, photo, size, names, default_class)
+    lf = LabelFile(path, fmt, None if classes is None else dict(classes), dict(Counter(o.cls for o in objs)))
+    if classes is None:
+        lf.objects = objs
+        return lf
+    unlisted = list(OrderedDict.fromkeys(o.cls for o in objs if not o.ignore and o.cls not in classes))
+    if unlisted:
+        raise SynthgenError(
+            f"{path}: {os.path.basename(photo)}: the class{'es' if len(unlisted) > 1 else ''} "
+            f"{', '.join(repr(c) for c in unlisted)} of its objects {'are' if len(unlisted) > 1 else 'is'} not in the "
+            f"labels' classes mapping ({lf.describe()}){_case_hints(unlisted, list(classes))}. Map every class "
+            "the file has to a scenario class, or to null to drop its objects deliberately")
+    for o in objs:
+        if o.cls not in classes:  # an ignore region the mapping does not name
+            lf.objects.append(o)
+        elif classes[o.cls] is not None:
+            lf.objects.append(RealObject(str(classes[o.cls]), o.box, o.polygon, o.ignore, o.source))
+    return lf
 
 
 def read_labels(path: str, fmt: str, photo: str, size, classes: Optional[Mapping[str, Optional[str]]] = None,
-                names: Optional[Sequence[str]] = None) -> List[RealObject]:
-    """The real objects of ``photo`` (its ``size`` = (width, height)) in label file ``path`` of
-    format ``fmt``. ``classes`` maps the file's class names to the scenario's (a name mapped
-    to None, or a name absent when ``classes`` is given, is dropped; KITTI's DontCare stays as
-    an ignore region)."""
-    if fmt not in LABEL_FORMATS:
-        raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
-    if fmt == "labelme":
-        objs = _labelme(path, photo, size)
-    elif fmt == "coco":
-        objs = _coco(path, photo, size)
-    elif fmt == "yolo":
-        objs = _yolo(path, photo, size, names)
-    else:
-        objs = _kitti(path, photo, size)
-    if classes is None:
-        return objs
-    out = []
-    for o in objs:
-        if o.ignore and o.cls not in classes:
-            out.append(o)
-            continue
-        mapped = classes.get(o.cls)
-        if mapped is not None:
-            o.cls = str(mapped)
-            out.append(o)
-    return out
+                names: Optional[Sequence[str]] = None, default_class: Optional[str] = None) -> List[RealObject]:
+    """The objects of :func:`load_labels`."""
+    return load_labels(path, fmt, photo, size, classes, names, default_class).objects
+
+
+def check_classes(files: Sequence[LabelFile], objects: Sequence[RealObject], class_names: Sequence[str],
+                  photo: str) -> None:
+    """Refuses real objects of a class the scenario does not have (they would be left out of
+    every output): a label file's mapping to such a class, or its objects' classes with no
+    mapping, and the calibration's own ``objects``. Ignore regions are free text."""
+    names = list(class_names)
+    for lf in files:
+        bad = list(OrderedDict.fromkeys([v for v in (lf.classes or {}).values() if v is not None and v not in names]
+                                        + [o.cls for o in lf.objects if not o.ignore and o.cls not in names]))
+        if bad:
+            raise SynthgenError(
+                f"{lf.path}: {os.path.basename(photo)}: {', '.join(repr(c) for c in bad)} "
+                f"{'are' if len(bad) > 1 else 'is'} not a class of the scenario ({', '.join(names)}): its real objects "
+                f"would be left out of the labels ({lf.describe()}){_case_hints(bad, names)}. Map the file's classes "
+                "to the scenario's, or to null to drop their objects deliberately")
+    from_files = {id(o) for lf in files for o in lf.objects}
+    for o in objects:
+        if not o.ignore and o.cls not in names and id(o) not in from_files:
+            raise SynthgenError(f"{photo}: the calibration's {o.source}: class '{o.cls}' is not a class of the "
+                                f"scenario ({', '.join(names)}): the real object would be left out of the labels")
 
 
 class PolygonSet:

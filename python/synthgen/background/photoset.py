@@ -15,12 +15,17 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple
 import numpy as np
 
 from .._core import SynthgenError
-from .labels import RealObject
+from .labels import RealObject, check_classes
 from ..scene.assets import file_sha256
 from .photos import Photo, expand_photos, load_photo
 from .sidecar import PhotoSetup, find_calibration_files, read_depth, read_photo_setup
 
 __all__ = ["PhotoSet", "FramePhoto", "resize_linear", "read_depth", "nearest_crop"]
+
+#: A real box the crop cuts to less than this many pixels wide or high, or to less than this
+#: share of its area, is an ignore region in the frame: too little is left to learn it from.
+MIN_REAL_CUT_PIXELS = 4.0
+MIN_REAL_CUT_SHARE = 0.25
 
 
 def occluder_mask(setup: PhotoSetup, photo: Photo) -> np.ndarray:
@@ -70,7 +75,8 @@ class FramePhoto:
     crop: Tuple[int, int, int, int]    #: x0, y0, width, height in scaled pixels
     pixels: np.ndarray                 #: the crop, H x W x 3 linear
     calibration: Any                   #: Calibration of the scaled photo
-    objects: List[RealObject]          #: real objects, boxes in crop pixels (clipped; polygons shifted)
+    objects: List[RealObject]          #: real objects, boxes in crop pixels (clipped; polygons shifted;
+                                       #: slivers the crop leaves are ignore regions)
     regions: List[np.ndarray]          #: placement polygons in crop pixels
     depth: Optional[np.ndarray] = None      #: the photo's metric depth in the crop (+inf: unknown)
     occluders: Optional[np.ndarray] = None  #: real things in front of everything inserted (crop)
@@ -168,13 +174,14 @@ class PhotoSet:
     def check(self, class_names: List[str]) -> int:
         """Reads every photo and its calibration once (validation), and decodes the depth map,
         occluder mask and environment map each names (a damaged file is an error here, not in a
-        frame); refuses a photo without real labels unless unlabelled_ok. Returns the number of
-        photos."""
+        frame); refuses a photo without real labels unless unlabelled_ok, and real objects of
+        classes the scenario does not have. Returns the number of photos."""
         from .._core import read_image
 
         for i, path in enumerate(self.paths):
             p = self.photo(i)
             s = self.setup(i, p)
+            check_classes(s.label_files, s.objects, class_names, path)
             if s.depth is not None:
                 read_depth(s, p.width, p.height)
             if s.occluders is not None:
@@ -240,7 +247,10 @@ class PhotoSet:
             if clipped[2] <= clipped[0] or clipped[3] <= clipped[1]:
                 continue  # outside the crop
             poly = None if o.polygon is None else np.asarray(o.polygon) * [sx, sy] - [x0, y0]
-            objects.append(RealObject(o.cls, clipped, poly, o.ignore, o.source))
+            cw, ch = clipped[2] - clipped[0], clipped[3] - clipped[1]
+            sliver = (cw < MIN_REAL_CUT_PIXELS or ch < MIN_REAL_CUT_PIXELS or
+                      cw * ch < MIN_REAL_CUT_SHARE * (bx[2] - bx[0]) * (bx[3] - bx[1]))
+            objects.append(RealObject(o.cls, clipped, poly, o.ignore or sliver, o.source))
             objects[-1].full_box = [float(v) for v in bx]  # type: ignore[attr-defined]
         regions = [np.asarray(p) * [sx, sy] - [x0, y0] for p in setup.regions]
         fp = FramePhoto(i, photo, setup, scale, (x0, y0, w, h),

@@ -22,7 +22,7 @@ from ..schema.fields import (REQUIRED, Bool, Choice, Field, FilePath, ListOf, Ma
 from ..schema.yaml_io import MarkedDict, MarkedList, read_yaml
 from .calibration import (Calibration, fov_to_focal, ground_from_horizon, ground_from_plane, sun_from_shadow)
 from .formats import focal_from_exif, read_cityscapes_camera, read_kitti_calib
-from .labels import LABEL_FORMATS, RealObject, box_of, read_labels
+from .labels import LABEL_FORMATS, LabelFile, RealObject, box_of, load_labels
 
 __all__ = ["CALIBRATION_SCHEMA", "PhotoSetup", "find_calibration_files", "read_photo_setup", "read_depth",
            "FOLDER_FILE"]
@@ -55,6 +55,16 @@ class _Horizon(Field):
         if isinstance(value, (list, tuple)) and len(value) == 2:
             return _Points(2).validate(value, loc, ctx)
         ctx.error(loc, f"expected an {self.type_name}, got {show_value(value)}")
+
+
+class _MappedClass(String):
+    """A scenario class a label file's class maps to, or null: that class's objects are dropped
+    deliberately."""
+
+    type_name = "string or null"
+
+    def validate(self, value: Any, loc: Loc, ctx: ValidationContext) -> Any:
+        return None if value is None else super().validate(value, loc, ctx)
 
 
 _INTRINSICS = Record(
@@ -117,10 +127,12 @@ _DEPTH = Record(
 
 _LABELS = Record(
     {"file": String(doc="label file (paths in a folder's file may use {stem} and {name})"),
-     "format": Choice(list(LABEL_FORMATS), doc="labelme, coco, yolo or kitti"),
-     "classes": MapOf(String(None), None, doc="the file's class names -> the scenario's (a name mapped to null, or "
-                                              "not listed, is dropped)"),
-     "names": ListOf(String(), None, doc="yolo: class names in the order of the class indices")},
+     "format": Choice(list(LABEL_FORMATS), doc="labelme, coco, yolo, kitti, csv (image,x0,y0,x1,y1[,class]) or "
+                                               "voc (Pascal VOC XML)"),
+     "classes": MapOf(_MappedClass(None), None, doc="the file's class names -> the scenario's (a name mapped to "
+                                                    "null is dropped; every class the file has must be listed)"),
+     "names": ListOf(String(), None, doc="yolo: class names in the order of the class indices"),
+     "class": String(None, doc="csv: the class of rows without a class column")},
     doc="a file of the photo's real labels")
 
 _OBJECT = Record(
@@ -182,6 +194,7 @@ class PhotoSetup:
     licence: str = ""
     source: str = ""
     files: List[str] = field(default_factory=list)   #: calibration and label files read
+    label_files: List[LabelFile] = field(default_factory=list)   #: the label files, their classes and mapping
 
     def meta(self) -> Dict[str, Any]:
         return {"calibration": self.calibration.meta(), "road_direction": self.road_direction,
@@ -533,10 +546,12 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
         setup.files.append(path)
         ctx, loc = r.loc("labels", f"[{i}].file")
         with ctx.core(loc):
-            got = read_labels(path, lab["format"], photo, (width, height), lab.get("classes"), lab.get("names"))
-            for o in got:
+            lf = load_labels(path, lab["format"], photo, (width, height), lab.get("classes"), lab.get("names"),
+                             lab.get("class"))
+            for o in lf.objects:
                 _check_box(o, o.source)
-        objs += got
+        setup.label_files.append(lf)
+        objs += lf.objects
     for key, ignore in (("objects", False), ("ignore", True)):
         for i, o in enumerate(r.get(key) or []):
             poly = o.get("polygon")

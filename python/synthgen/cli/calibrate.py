@@ -16,6 +16,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                                         "in the current directory)")
     p.add_argument("--calibration", metavar="FILE", help="a calibration file shared by photos (as the scenario's "
                                                          "background.calibration)")
+    p.add_argument("--classes", metavar="NAMES", help="the scenario's classes, comma-separated: real labels of "
+                                                      "other classes are refused, as synthgen validate does")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -27,6 +29,10 @@ def run(args: argparse.Namespace) -> int:
     photo = load_photo(args.photo)
     setup = read_photo_setup(photo.path, photo.width, photo.height, shared=args.calibration,
                              exif_focal_mm=photo.exif_focal_mm, exif_focal_35mm=photo.exif_focal_35mm)
+    if args.classes is not None:
+        from ..background.labels import check_classes
+
+        check_classes(setup.label_files, setup.objects, [c for c in args.classes.split(",") if c], photo.path)
     c = setup.calibration
     out = args.output or os.path.splitext(os.path.basename(args.photo))[0] + ".calibration.png"
     draw_preview(to_srgb8(photo.pixels), setup, out)
@@ -40,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"  assumed: {a}")
     if setup.sun is not None:
         print(f"  sun: azimuth {setup.sun[0]:.1f} deg, elevation {setup.sun[1]:.1f} deg ({setup.sun_source})")
+    for lf in setup.label_files:
+        print(f"  labels {lf.path} ({lf.format}): {lf.describe()}")
     real = [o for o in setup.objects if not o.ignore]
     print(f"  real objects: {len(real)} labelled, {len(setup.objects) - len(real)} ignore regions"
           + ("" if setup.labelled else " (the photo declares no labels)"))

@@ -15,6 +15,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from .._core import SynthgenError
 from ..background.labels import PolygonSet, object_mask, polygon_mask
 from ..background.photoset import FramePhoto
 from ..post.photo.composite import composite
@@ -364,8 +365,9 @@ def real_object_records(fp: FramePhoto, instance_id: np.ndarray, class_names: Se
     covered = instance_id > 0
     out = []
     for i, o in enumerate(fp.objects):
-        if not o.ignore and o.cls not in class_names:
-            continue
+        if not o.ignore and o.cls not in class_names:  # validation refuses these (labels.check_classes)
+            raise SynthgenError(f"{o.source}: real object of class '{o.cls}', not a class of the scenario "
+                                f"({', '.join(class_names)}): it would be left out of the labels")
         mask = object_mask(o.polygon, o.box, w, h)
         area = int(mask.sum())
         vis = float((mask & ~covered).sum() / area) if area else 0.0
