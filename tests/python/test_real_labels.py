@@ -71,7 +71,7 @@ def test_the_mapping_error_reaches_the_calibration(tmp_path):
     (tmp_path / "calibration.yaml").write_text(
         "intrinsics: {fov_x: 60}\nground: {camera_height: 1.4, horizon: 40}\n"
         "labels: [{file: '{stem}.txt', format: kitti, classes: {car: car}}]\n")
-    with pytest.raises(SceneFileError, match=r"calibration.yaml:3:\d+: labels: \[0\]: .*000001.txt: 000001.png: the "
+    with pytest.raises(SceneFileError, match=r"calibration.yaml:3:\d+: labels\[0\]\.file: .*000001.txt: 000001.png: the "
                                              r"classes 'Car', 'Pedestrian' of its objects are not in the labels' "
                                              r"classes mapping \(classes found in it: Car \(2\), Pedestrian \(1\), "
                                              r"DontCare \(1\); classes: \{car: car\}\)"):
@@ -113,7 +113,7 @@ def test_classes_the_scenario_does_not_have_are_refused(tmp_path):
 
 @pytest.mark.parametrize("labels, error", [
     ("{file: '{stem}.txt', format: kitti, classes: {car: car, Pedestrian: null}}",
-     r"calibration.yaml:3:\d+: labels: \[0\]: .*000001.txt: 000001.png: the class 'Car' of its objects is not in the "
+     r"calibration.yaml:3:\d+: labels\[0\]\.file: .*000001.txt: 000001.png: the class 'Car' of its objects is not in the "
      r"labels' classes mapping \(classes found in it: Car \(2\), Pedestrian \(1\), DontCare \(1\); classes: "
      r"\{car: car, Pedestrian: null\}\); 'Car' is not 'car'"),
     ("{file: '{stem}.txt', format: kitti, classes: {Car: vehicle, Pedestrian: null}}",
@@ -371,3 +371,22 @@ def test_the_highway_boxes_csv_reads():
         assert [o.box for o in objs] == [[float(v) for v in r[1:5]] for r in rows if r[0] == im]
         total += len(objs)
     assert total == len(rows)
+
+
+def test_a_labelme_object_that_cannot_be_read_is_an_error_not_dropped(tmp_path):
+    """A polygon of 2 points, a rectangle of 3 and a shape type the reader does not know (labelme's
+    'mask') each mark an object: an error naming the shape, never a label left out. Points and
+    lines mark no object and are skipped."""
+    f = tmp_path / "a.json"
+    for shape, words in ((
+            {"label": "car", "points": [[1, 2], [30, 40]], "shape_type": "polygon"}, "a polygon needs at least 3 points"),
+            ({"label": "car", "points": [[1, 2], [30, 40], [5, 6]], "shape_type": "rectangle"}, "a rectangle needs 2"),
+            ({"label": "car", "points": [[1, 2], [30, 40]], "shape_type": "mask"}, "shape_type 'mask' is not read")):
+        f.write_text(json.dumps({"shapes": [shape]}))
+        with pytest.raises(sg.SynthgenError, match=r"a.json: shapes\[0\]: " + words):
+            read_labels(str(f), "labelme", "a.jpg", (200, 100), {"car": "car"})
+    f.write_text(json.dumps({"shapes": [{"label": "pole", "points": [[1, 2]], "shape_type": "point"},
+                                        {"label": "lane", "points": [[1, 2], [9, 9]], "shape_type": "line"},
+                                        {"label": "car", "points": [[1, 2], [30, 40]], "shape_type": "rectangle"}]}))
+    objs = read_labels(str(f), "labelme", "a.jpg", (200, 100), {"car": "car", "pole": None, "lane": None})
+    assert [(o.cls, list(o.box)) for o in objs] == [("car", [1.0, 2.0, 30.0, 40.0])]

@@ -147,8 +147,14 @@ def _labelme(path: str, photo: str, size) -> List[RealObject]:
             box, poly = [p[0, 0] - r, p[0, 1] - r, p[0, 0] + r, p[0, 1] + r], None
         elif kind in ("polygon", "linestrip") and len(p) >= 3:
             box, poly = box_of(p), p
-        else:
+        elif kind in ("point", "points", "line") or (kind == "linestrip" and len(p) < 3):
             continue  # points and lines mark no object
+        elif kind in ("polygon", "rectangle", "circle"):  # an object that cannot be read: never dropped
+            need = "at least 3 points" if kind == "polygon" else "2 points"
+            raise SynthgenError(f"{where}: a {kind} needs {need}, got {len(p)} (label '{s['label']}')")
+        else:
+            raise SynthgenError(f"{where}: shape_type '{kind}' is not read (polygon, rectangle, circle; point, "
+                                f"line and linestrip mark no object): convert it to a polygon (label '{s['label']}')")
         out.append(RealObject(s["label"], box, poly, False, where))
     return out
 
