@@ -5,6 +5,11 @@ as the frames), images, environment maps, assets (fetched and checksummed) and t
 generated signs and plates -- and creates every material and light whose parameters are
 constants, so a broken file or an impossible combination of parameters is reported once, by
 ``FILE:LINE:COLUMN: key.path: reason``, instead of failing every frame of a run.
+
+Every model an object entry can draw (each option of a ``choice`` of assets) is checked against
+every randomizer applied to the entry, by the run's own test (``Randomizer.needs``): paint needs
+a paint material, plates plate mounts, lamps lamps; a library entry's material roles must name
+materials of its model.
 """
 from __future__ import annotations
 
@@ -25,6 +30,14 @@ def _options(v: Any) -> List[Any]:
     return list(v.options) if isinstance(v, D.Choice) else [v]
 
 
+def _drawable(v: Any) -> List[Any]:
+    """Every value ``v`` can take as far as choices go: the options of a choice (of choices),
+    those of weight 0 left out; any other value is itself."""
+    if isinstance(v, D.Choice):
+        return [x for o, p in zip(v.options, v.p) if p > 0 for x in _drawable(o)]
+    return [v]
+
+
 def _constant(tree: Any) -> bool:
     return not D.has_distribution(tree)
 
@@ -33,23 +46,25 @@ class _Checker:
     def __init__(self, sc: Scenario):
         self.ctx = ValidationContext(sc.source, sc.base_dir)
         self.scene = Scene()
-        self.seen: Dict[Tuple[str, str], None] = {}
+        self.seen: Dict[Tuple[str, str], Any] = {}   # (kind, path) -> what loading it returned
         self.fonts = False
+        self.asset_paths: Dict[str, str] = {}   # asset id -> its cached file
 
     def fail(self, loc: Loc, what: str, e: Exception) -> None:
         raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path, f"{what}: {e}") from None
 
-    def once(self, kind: str, path: str, loc: Loc, load: Callable[[], Any]) -> None:
+    def once(self, kind: str, path: str, loc: Loc, load: Callable[[], Any]) -> Any:
         if (kind, path) in self.seen:
-            return
+            return self.seen[(kind, path)]
         self.seen[(kind, path)] = None
         try:
-            load()
+            self.seen[(kind, path)] = load()
         except (SynthgenError, OSError) as e:
             self.fail(loc, f"cannot use this {kind}", e)
+        return self.seen[(kind, path)]
 
-    def mesh(self, path: str, loc: Loc) -> None:
-        self.once("mesh", path, loc, lambda: self.scene.load_mesh_file(path))
+    def mesh(self, path: str, loc: Loc) -> Any:
+        return self.once("mesh", path, loc, lambda: self.scene.load_mesh_file(path))
 
     def image(self, path: str, loc: Loc) -> None:
         self.once("image", path, loc, lambda: self.scene.add_texture("image", {"file": path}))
@@ -67,6 +82,7 @@ class _Checker:
                 path = assets.resolve(a)
             except (SynthgenError, OSError) as e:
                 self.fail(loc, f"cannot fetch asset '{a}'", e)
+            self.asset_paths[a] = path
             (self.mesh if kind == "mesh" else self.envmap)(path, loc)
 
     def texture_files(self, tree: Any, loc: Loc) -> None:
@@ -130,11 +146,12 @@ class _Checker:
                         self.asset(li["asset"], "hdr", li.locs.get("asset", li.loc))
 
     def objects(self, objects: List[Validated]) -> None:
-        for o in objects:
+        for i, o in enumerate(objects):
             if o.get("mesh") is not None:
                 self.mesh(str(o["mesh"]), o.locs["mesh"])
             if o.get("asset") is not None:
                 self.asset(o["asset"], "mesh", o.locs["asset"])
+            self.model_parts(i, o)
             if o.get("material") is not None:
                 self.plugin("material", o["material"], o.locs["material"])
             if o.get("sign") is not None or o.get("plate") is not None:
@@ -144,6 +161,47 @@ class _Checker:
                     self.image(str(d["image"]), d.locs["image"])
                 else:
                     self.fonts = True
+
+    def model_parts(self, i: int, o: Validated) -> None:
+        """Each model entry ``o`` can draw against each randomizer applied to it, by the run's
+        test (Randomizer.needs); an asset's material roles against its model's materials."""
+        from ..randomize import ModelParts, randomizers
+        from .schema import SHAPE_KEYS
+
+        applied = [r for r in randomizers() if any(v is not None for v in _drawable(o.get(r.key)))]
+        kind = next((k for k in SHAPE_KEYS if o.get(k) is not None), None)
+        if kind is None:
+            return
+        loc = o.locs.get(kind, o.loc)
+        replaced = any(v is not None for v in _drawable(o.get("material")))
+        # (what, its parts, its parts were its own materials kept)
+        models: List[Tuple[str, ModelParts, ModelParts]] = []
+        if kind == "asset":
+            from ..scene import assets
+            from ..scene.vehicles import material_roles
+
+            for a in _drawable(o["asset"]):
+                if a is None:
+                    continue
+                entry = assets.entry(a)
+                loaded = self.seen.get(("mesh", self.asset_paths.get(a, ""))) or {}
+                try:
+                    roles = material_roles(a, entry, loaded.get("material_names", []), loaded.get("material_ids", []))
+                except SynthgenError as e:
+                    raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path, str(e)) from None
+                models.append((f"asset '{a}'", ModelParts.of_entry(entry, roles, replaced),
+                               ModelParts.of_entry(entry, roles, False)))
+        else:
+            what = f"{kind} '{o[kind]}'" if kind in ("primitive", "mesh") else f"a {kind}"
+            models.append((what, ModelParts(), ModelParts()))
+        for what, parts, own in models:
+            for r in applied:
+                why = r.needs(parts)
+                if why:
+                    if not r.needs(own):
+                        why = f"objects[{i}].material replaces the model's own materials, which {r.key} needs"
+                    raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path,
+                                         f"{what} cannot take objects[{i}].{r.key}: {why}")
 
     def check_fonts(self, loc: Loc) -> None:
         from ..scene import raster

@@ -46,7 +46,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["AXES", "PLATE_MM", "ROLES", "LAMP_KINDS", "lamp_names", "lamp_lenses", "role_material", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
+__all__ = ["AXES", "PLATE_MM", "ROLES", "LAMP_KINDS", "lamp_names", "lamp_lenses", "role_material", "material_roles", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
            "body_lift", "build_vehicle"]
 
 #: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
@@ -82,6 +82,24 @@ def role_material(role: str) -> Tuple[str, Dict[str, Any]]:
             "chrome": ("conductor", {"metal": "chrome", "roughness": 0.06}),
             "rubber": ("coated", {"albedo": 0.025, "roughness": 0.75, "specular": 0.4}),
             "trim": ("coated", {"albedo": 0.03, "roughness": 0.45, "specular": 0.6})}[role]
+
+
+def material_roles(asset_id: str, entry: Mapping[str, Any], material_names: Sequence[str],
+                   material_ids: Sequence[int]) -> Dict[str, List[int]]:
+    """{role: the model's material ids} of a library entry's ``materials`` ({name in the model:
+    role}), given the model's material names and ids as its import returns them (the frame's
+    shapes and ``synthgen validate`` both read the roles here). AssetError naming a material
+    the model does not have."""
+    from .assets import AssetError
+
+    by_name = dict(zip(material_names, material_ids))
+    roles: Dict[str, List[int]] = {}
+    for name, role in (entry.get("materials") or {}).items():
+        if name not in by_name:
+            raise AssetError(f"asset '{asset_id}': materials: the model has no material '{name}' (it has "
+                             f"{', '.join(repr(n) for n in by_name) or 'none'})")
+        roles.setdefault(role, []).append(int(by_name[name]))
+    return roles
 
 
 def model_axes(forward: str = "+x", up: str = "+y") -> np.ndarray:
