@@ -96,7 +96,7 @@ def test_a_region_too_small_for_the_object_is_an_error_inside_the_image_a_warnin
     assert _findings(tmp_path, region="region: [[[0, 60], [200, 60], [200, 100], [0, 100]]]") == []
 
 
-def _scenario(tmp_path, cal_text):
+def _scenario(tmp_path, cal_text, obj="{class: car, primitive: box, size: [4.5, 1.5, 1.8]}"):
     (tmp_path / "cal.yaml").write_text(cal_text)
     write_srgb_png(str(tmp_path / "p.png"), np.full((100, 200, 3), 0.5, np.float32))
     p = tmp_path / "s.yaml"
@@ -107,11 +107,11 @@ background:
   photos: [{file: p.png, calibration: cal.yaml}]
   min_distance: 4
   max_distance: 45
-objects: [{class: car, primitive: box, size: [4.5, 1.5, 1.8]}]
+objects: [OBJ]
 placement: {allow_drops: true}
 render: {spp: 1, max_depth: 1}
 outputs: [rgb]
-""")
+""".replace("OBJ", obj))
     return str(p)
 
 
@@ -187,3 +187,16 @@ def test_a_car_seen_from_the_side_is_measured_by_its_length():
     rear = label_checks(PhotoSetup("x", cal, road_direction=0.0,
                                    objects=[RealObject("car", _rendered_car_box(cal, 4.5, 1.8, [1.0, 12.0]))]))[0]
     assert not rear["plausible"], rear
+
+
+def test_the_smallest_object_an_entry_can_draw_is_what_must_fit(tmp_path):
+    """A region 7.4 to 10 m ahead, about 1.4 m across (3.5 m^2 of ground): a 4.5 x 1.8 m box cannot
+    stand there; scaled by 0.6 to 1 (2.7 x 1.08 m at the smallest) it can."""
+    cal = SANE.replace("HEIGHT", "1.5").replace("HORIZON", "40").replace(
+        "REGION", "region: [[[92, 55], [108, 55], [108, 60], [92, 60]]]")
+    with pytest.raises(SceneFileError) as e:
+        check_inputs(load_scenario(_scenario(tmp_path, cal)))
+    assert e.value.key_path == "region" and "less than the footprint of objects[0] (a box) (4.50 x 1.80 m" \
+        in str(e.value), str(e.value)
+    check_inputs(load_scenario(_scenario(tmp_path, cal, "{class: car, primitive: box, size: [4.5, 1.5, 1.8], "
+                                                        "scale: {uniform: [0.6, 1.0]}}")))
