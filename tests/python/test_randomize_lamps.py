@@ -131,8 +131,9 @@ objects: [{class: box, primitive: box, lamps: {}}]
 render: {spp: 1}
 outputs: [rgb]
 """)
-    s = runner.run(str(tmp_path / "s.yaml"), str(tmp_path / "ds"), count=1, progress=False)
-    assert s["failures"] and "declares no lamps" in s.text()
+    from test_randomize_paint import _refused_before_and_by_the_frame
+
+    _refused_before_and_by_the_frame(tmp_path / "s.yaml", tmp_path, "lamps", "declares no lamps")
 
 
 @pytest.mark.parametrize("lamps, message", [

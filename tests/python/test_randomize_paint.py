@@ -3,6 +3,7 @@
 dark, and paint on a model that names no paint material is refused."""
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -58,6 +59,19 @@ outputs: [albedo, instance]
         assert glass.mean() > 0.03, (k, glass.mean())  # and its windows are dark glass
 
 
+def _refused_before_and_by_the_frame(path, tmp_path, key, words):
+    """``synthgen run`` (and validate) refuse the scenario at the object's shape key before
+    rendering; a frame rendered without that check fails with the same reason (one test, the
+    randomizer's needs, in both)."""
+    from synthgen import SceneFileError, Scenario, SynthgenError
+
+    with pytest.raises(SceneFileError) as e:
+        runner.run(str(path), str(tmp_path / "ds"), count=1, progress=False)
+    assert e.value.key_path == "objects[0].primitive" and words in str(e.value), str(e.value)
+    with pytest.raises(SynthgenError, match=re.escape(f"objects[0].{key}: its model {words}")):
+        Scenario(str(path), check_inputs=False).frame(0)
+
+
 def test_paint_on_a_model_without_a_paint_material_is_refused(tmp_path):
     scen = tmp_path / "s.yaml"
     scen.write_text("""
@@ -67,8 +81,7 @@ objects: [{class: box, primitive: box, paint: {palette: cars}}]
 render: {spp: 1}
 outputs: [rgb]
 """)
-    s = runner.run(str(scen), str(tmp_path / "ds"), count=1, progress=False)
-    assert s["failures"] and "names no paint material" in s.text()
+    _refused_before_and_by_the_frame(scen, tmp_path, "paint", "names no paint material")
 
 
 def test_an_unknown_material_role_is_refused(tmp_path):

@@ -93,8 +93,9 @@ objects: [{class: box, primitive: box, plates: {country: de}}]
 render: {spp: 1}
 outputs: [rgb]
 """)
-    s = runner.run(str(scen), str(tmp_path / "ds"), count=1, progress=False)
-    assert s["failures"] and "declares no plate mounts" in s.text()
+    from test_randomize_paint import _refused_before_and_by_the_frame
+
+    _refused_before_and_by_the_frame(scen, tmp_path, "plates", "declares no plate mounts")
 
 
 def test_plate_only_boxes_are_labels_of_their_own_class(tmp_path):

@@ -3,6 +3,7 @@
 its YAML line with what is wrong; constant materials and lights are created once too; a run
 whose frames all fail the same way stops early. Library warnings stay off stderr."""
 import os
+import re
 import shutil
 
 import numpy as np
@@ -94,3 +95,71 @@ def test_a_run_whose_frames_all_fail_alike_stops_early(tmp_path, monkeypatch):
     monkeypatch.setattr(FrameRenderer, "render", broken)
     s = runner.run(scenario(tmp_path, "{class: b, primitive: box}"), str(tmp_path / "ds"), count=40, progress=False)
     assert len(s["failures"]) == runner.ABORT_AFTER and "stopped after 3 frames" in s.text()
+
+
+def _library(tmp_path, monkeypatch, body_role="paint"):
+    """A manifest of its own with two small models (OBJ with a material 'body'): test/painted
+    names 'body' as its paint (``body_role``), test/plain names no roles, plates or lamps."""
+    import hashlib
+
+    import yaml
+
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "car.obj").write_text("mtllib car.mtl\nv -2 0 -1\nv 2 0 -1\nv 2 1.4 1\nv -2 1.4 1\nusemtl body\n"
+                                 "f 1 2 3\nf 1 3 4\n")
+    (lib / "car.mtl").write_text("newmtl body\nKd 0.5 0.5 0.5\n")
+
+    def sha(name):
+        return hashlib.sha256((lib / name).read_bytes()).hexdigest()
+
+    def entry(asset_id, **extra):
+        return dict({"id": asset_id, "kind": "mesh", "licence": "CC0-1.0", "source": {"path": str(lib / "car.obj")},
+                     "sha256": sha("car.obj"), "companions": [{"path": str(lib / "car.mtl"), "sha256": sha("car.mtl")}]},
+                    **extra)
+
+    (tmp_path / "manifest").mkdir()
+    (tmp_path / "manifest" / "cars.yaml").write_text(yaml.safe_dump({"assets": [
+        entry("test/painted", materials={"body": "paint"} if body_role == "paint" else {body_role: "paint"}),
+        entry("test/plain")]}))
+    monkeypatch.setenv("SYNTHGEN_MANIFEST", str(tmp_path / "manifest"))
+    monkeypatch.setenv("SYNTHGEN_CACHE", str(tmp_path / "cache"))
+
+
+@pytest.mark.parametrize("obj, key, words", [
+    # A choice that can draw a model without a paint material: its frames would fail (issue 33.7).
+    ("{class: car, asset: {choice: [test/painted, test/plain]}, paint: {}}", "objects[0].asset",
+     "asset 'test/plain' cannot take objects[0].paint: its model names no paint material"),
+    ("{class: car, asset: {choice: [test/painted, test/plain]}, plates: {country: de}}", "objects[0].asset",
+     "asset 'test/painted' cannot take objects[0].plates: its model declares no plate mounts"),
+    ("{class: car, asset: test/painted, lamps: {head: {choice: [\"off\", low]}}}", "objects[0].asset",
+     "asset 'test/painted' cannot take objects[0].lamps: its model declares no lamps"),
+    ("{class: car, asset: test/painted, paint: {}, material: {type: diffuse}}", "objects[0].asset",
+     "objects[0].material replaces the model's own materials, which paint needs"),
+    ("{class: b, primitive: box, paint: {}}", "objects[0].primitive",
+     "primitive 'box' cannot take objects[0].paint: its model names no paint material"),
+])
+def test_every_model_an_entry_can_draw_is_checked_against_its_randomizers(tmp_path, monkeypatch, obj, key, words):
+    _library(tmp_path, monkeypatch)
+    path = scenario(tmp_path, obj)
+    e = error_of(path)
+    assert (e.line, e.key_path) == (4, key) and words in str(e), str(e)
+    # The run refuses it before rendering anything (it would have failed the frames drawing it).
+    with pytest.raises(SceneFileError, match=re.escape(words)):
+        runner.run(path, str(tmp_path / "ds"), count=4, progress=False)
+
+
+def test_models_that_can_take_the_randomizers_pass(tmp_path, monkeypatch):
+    _library(tmp_path, monkeypatch)
+    # The control: only the painted model can be drawn (the other option has weight 0).
+    sc = load_scenario(scenario(tmp_path, "{class: car, asset: {choice: [test/painted, test/plain], weights: [1, 0]}, "
+                                          "paint: {}, wear: {dirt: {}}}"))
+    assert check_inputs(sc) == {"mesh": 2}   # both files are loaded, as before
+
+
+def test_a_material_role_naming_no_material_of_the_model_is_refused(tmp_path, monkeypatch):
+    _library(tmp_path, monkeypatch, body_role="carbody")
+    e = error_of(scenario(tmp_path, "{class: car, asset: {choice: [test/plain, test/painted]}}"))
+    assert e.key_path == "objects[0].asset" and \
+        "asset 'test/painted': materials: the model has no material 'carbody' (it has 'DefaultMaterial', 'body')" \
+        in str(e), str(e)

@@ -1,22 +1,28 @@
 """The picture a user checks a calibration by (``synthgen calibrate PHOTO``): the photo with its
 horizon, a metric grid on the ground, the placement region, the real labels and ignore regions,
 and a reference car (4.5 x 1.8 x 1.5 m) at three distances ahead, turned along the road; and, per labelled
-car, the width the calibration gives it (a real car is 1.6 to 2.0 m wide)."""
+car, how wide its box is against the box a real car turned along the road would have there (its
+width seen from behind or ahead, its length seen from the side: ``road_direction``)."""
 from __future__ import annotations
 
 import math
-from typing import Any, Dict, List, Sequence
+from typing import Any, Dict, List, Optional, Sequence
 
 import numpy as np
 
 from .calibration import Calibration
 from .sidecar import PhotoSetup
 
-__all__ = ["REFERENCE_CAR", "REFERENCE_DISTANCES", "label_checks", "draw_preview", "box_corners"]
+__all__ = ["REFERENCE_CAR", "REFERENCE_DISTANCES", "CAR_LENGTH", "CAR_WIDTH", "label_checks", "draw_preview",
+           "box_corners", "car_box_width"]
 
 #: Length, width, height in metres of the reference car drawn (a mid-size saloon).
 REFERENCE_CAR = (4.5, 1.8, 1.5)
 REFERENCE_DISTANCES = (8.0, 15.0, 30.0)
+#: Lengths and widths (metres) of real cars, 0.1 m of labelling slack included: a city car of
+#: 3.5 m to a large saloon or SUV of 5.3 m; 1.6 to 2.0 m wide.
+CAR_LENGTH = (3.4, 5.4)
+CAR_WIDTH = (1.5, 2.1)
 
 
 def box_corners(centre_x: float, centre_z: float, yaw_right: float, size: Sequence[float]) -> np.ndarray:
@@ -39,10 +45,45 @@ def _segment(cal: Calibration, a: np.ndarray, b: np.ndarray, n: int = 24) -> np.
     return cal.project(a + t * (b - a))
 
 
+def car_box_width(cal: Calibration, box: Sequence[float], road_direction: float, length: float, width: float,
+                  height: float = REFERENCE_CAR[2]) -> Optional[float]:
+    """Width in pixels of the image box of a car (``length`` x ``width`` x ``height`` metres)
+    standing on the ground turned along the road, placed where its image box's bottom centre is
+    that of ``box`` (found by moving it until they agree within 0.05 px); None when no such
+    place is in view."""
+    x0, y0, x1, y1 = box
+    target = np.array([0.5 * (x0 + x1), float(y1)])
+    a = math.radians(road_direction)
+    fwd, side = np.array([-math.sin(a), 0.0, math.cos(a)]), np.array([math.cos(a), 0.0, math.sin(a)])
+    anchor = target.copy()
+    for _ in range(20):
+        # The car's nearest point (seen from the camera) on the ground under ``anchor``, its
+        # centre half its extent along the line of sight beyond.
+        p = cal.ground_point(anchor[None])[0]
+        if not np.all(np.isfinite(p)):
+            return None
+        ray = np.array([p[0], 0.0, p[2]]) / max(math.hypot(p[0], p[2]), 1e-9)
+        c = p + 0.5 * (length * abs(float(fwd @ ray)) + width * abs(float(side @ ray))) * ray
+        uv = cal.project(box_corners(float(c[0]), float(c[2]), road_direction, (length, width, height)))
+        if not np.all(np.isfinite(uv)):
+            return None
+        err = target - np.array([0.5 * (uv[:, 0].min() + uv[:, 0].max()), uv[:, 1].max()])
+        if np.abs(err).max() < 0.05:
+            break
+        anchor = anchor + err
+    return float(uv[:, 0].max() - uv[:, 0].min())
+
+
 def label_checks(setup: PhotoSetup, classes: Sequence[str] = ("car",)) -> List[Dict[str, Any]]:
-    """Per real object of ``classes``: its distance and the width the calibration gives it
-    (box width x distance / fx, from the ground point below its box's bottom centre)."""
+    """Per real object of ``classes``: its distance (camera z of the ground point below its box's
+    bottom centre), the width the calibration gives it (box width x distance / fx: a car seen
+    from behind), the angle between the road (``road_direction``) and the line of sight there
+    (0: seen from behind or ahead, 90: from the side), its box's width in pixels and the range a
+    real car turned along the road would have there (``expected``: :func:`car_box_width` of the
+    smallest and largest cars, :data:`CAR_LENGTH` x :data:`CAR_WIDTH`); ``plausible``: the box
+    within that range."""
     cal = setup.calibration
+    rd = setup.road_direction
     out = []
     for o in setup.objects:
         if o.ignore or o.cls not in classes:
@@ -53,8 +94,16 @@ def label_checks(setup: PhotoSetup, classes: Sequence[str] = ("car",)) -> List[D
             out.append({"class": o.cls, "box": list(o.box), "distance": None, "width": None})
             continue
         z_cam = float((np.linalg.inv(cal.world_from_camera()) @ np.r_[p, 1.0])[2])
+        a = math.radians(rd)
+        ray = np.array([p[0], p[2]]) / max(math.hypot(p[0], p[2]), 1e-9)
+        angle = math.degrees(math.acos(min(1.0, abs(float(ray @ [-math.sin(a), math.cos(a)])))))
+        small = car_box_width(cal, o.box, rd, CAR_LENGTH[0], CAR_WIDTH[0])
+        large = car_box_width(cal, o.box, rd, CAR_LENGTH[1], CAR_WIDTH[1])
+        expected = None if small is None or large is None else [small, large]
         out.append({"class": o.cls, "box": [float(v) for v in o.box], "distance": z_cam,
-                    "width": (x1 - x0) * z_cam / cal.fx})
+                    "width": (x1 - x0) * z_cam / cal.fx, "angle": angle, "box_width": float(x1 - x0),
+                    "expected": expected,
+                    "plausible": None if expected is None else bool(expected[0] <= x1 - x0 <= expected[1])})
     return out
 
 

@@ -195,6 +195,8 @@ class PhotoSetup:
     source: str = ""
     files: List[str] = field(default_factory=list)   #: calibration and label files read
     label_files: List[LabelFile] = field(default_factory=list)   #: the label files, their classes and mapping
+    #: Where each key was given: "ground", "ground.horizon", ... -> (file, line, column).
+    where: Dict[str, Tuple[str, int, int]] = field(default_factory=dict)
 
     def meta(self) -> Dict[str, Any]:
         return {"calibration": self.calibration.meta(), "road_direction": self.road_direction,
@@ -505,6 +507,11 @@ def read_photo_setup(photo: str, width: int, height: int, *, shared: Optional[st
     except SynthgenError as e:
         r.error("distortion" if "distortion" in r.values and "distortion" in str(e) else "intrinsics", str(e))
     setup = PhotoSetup(photo=os.path.abspath(photo), calibration=cal, files=list(files))
+    for key, (value, ctx, loc) in r.values.items():
+        setup.where[key] = (ctx.source, loc.line, loc.column)
+        for sub in getattr(value, "given", ()):
+            sl = value.locs.get(sub, loc)
+            setup.where[f"{key}.{sub}"] = (ctx.source, sl.line, sl.column)
     # -- placement -----------------------------------------------------------------------------
     setup.regions = list(r.get("region") or [])
     rd = r.get("road_direction")

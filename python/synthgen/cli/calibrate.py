@@ -1,11 +1,15 @@
 """``synthgen calibrate PHOTO``: reads a photo's calibration (sidecar, folder file, or
 --calibration) and draws it over the photo: horizon, a metric ground grid, the placement
 region, real labels and ignore regions, a reference car at three distances. Prints the
-calibration and, per labelled car, the width the calibration gives it."""
+calibration, per labelled car how wide its box is against a real car turned along the road there
+(its width seen from behind, its length from the side), and what in its geometry would let
+nothing stand in the photo (synthgen.background.geometry: errors, exit status 2) or is
+suspicious (warnings)."""
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 
 from . import Command, register
 
@@ -22,7 +26,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..background.photos import load_photo
-    from ..background.preview import draw_preview, label_checks
+    from ..background.geometry import geometry_findings
+    from ..background.preview import CAR_LENGTH, CAR_WIDTH, REFERENCE_CAR, draw_preview, label_checks
+    from ..scenario.schema import BACKGROUND
     from ..background.sidecar import read_photo_setup
     from ..outputs.files import to_srgb8
 
@@ -54,17 +60,30 @@ def run(args: argparse.Namespace) -> int:
     for chk in label_checks(setup):
         if chk["distance"] is None:
             print(f"    {chk['class']} {[round(v) for v in chk['box']]}: its bottom is above the horizon")
+        elif chk["expected"] is None:
+            print(f"    {chk['class']} {[round(v) for v in chk['box']]}: {chk['distance']:.1f} m away")
         else:
-            flag = "" if 1.5 <= chk["width"] <= 2.1 else \
-                "  <- a car seen from behind is 1.6 to 2.0 m wide (seen at an angle, its box holds its side too)"
-            print(f"    {chk['class']} {[round(v) for v in chk['box']]}: {chk['distance']:.1f} m away, "
-                  f"{chk['width']:.2f} m wide{flag}")
+            lo, hi = chk["expected"]
+            flag = "" if chk["plausible"] else ("  <- not a car's size there: check camera_height, the horizon and "
+                                                "the field of view (or the car is partly hidden, or not along the "
+                                                "road)")
+            print(f"    {chk['class']} {[round(v) for v in chk['box']]}: {chk['distance']:.1f} m away, seen "
+                  f"{chk['angle']:.0f} deg off the road's direction; its box is {chk['box_width']:.0f} px wide, a car "
+                  f"({CAR_LENGTH[0]:g} to {CAR_LENGTH[1]:g} m long, {CAR_WIDTH[0]:g} to {CAR_WIDTH[1]:g} m wide) "
+                  f"turned along the road {lo:.0f} to {hi:.0f} px there{flag}")
+    near, far = (BACKGROUND.fields[k].default for k in ("min_distance", "max_distance"))
+    findings = geometry_findings(setup, near, far, [("a car (the reference car)", REFERENCE_CAR[0], REFERENCE_CAR[1])],
+                                 distance_keys="background.min_distance .. max_distance's defaults", scenario=False)
+    for f in findings:
+        print(f"{'error' if f.error else 'warning'}: {f}", file=sys.stderr)
     print(f"preview: {out}")
-    return 0
+    return 2 if any(f.error for f in findings) else 0
 
 
 register(Command("calibrate", "check a photo's calibration on a preview",
                  "Read a photo's calibration (PHOTO.yaml, the folder's calibration.yaml, or --calibration) and "
                  "draw it over the photo: the horizon, a metric ground grid, the placement region, the real labels "
                  "and ignore regions, and a reference car at 8, 15 and 30 m ahead, turned along the road. Prints the calibration "
-                 "and the width it gives each labelled car.", add_arguments, run, order=47, module=__name__))
+                 "and, per labelled car, its box's width against a real car's there (seen from behind or from the "
+                 "side: road_direction); errors (exit status 2) where nothing could stand in the photo, warnings "
+                 "where its geometry is suspicious.", add_arguments, run, order=47, module=__name__))

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import List
 
 from . import Command, register
 from .common import add_extension_option, add_scenario_overrides, scenario_overrides
@@ -18,7 +19,10 @@ def run(args: argparse.Namespace) -> int:
     from ..scenario import check_inputs, load_scenario
 
     sc = load_scenario(args.scenario, scenario_overrides(args), allow_extensions=args.allow_extensions)
-    checked = check_inputs(sc)
+    warnings: List[str] = []
+    checked = check_inputs(sc, warnings)
+    for w in warnings:  # suspicious, not wrong (a photo's geometry)
+        print(f"warning: {w}", file=sys.stderr)
     plural = {"mesh": "meshes", "environment map": "environment maps"}
 
     def name(kind: str, n: int) -> str:

@@ -18,7 +18,6 @@ import numpy as np
 from .._core import Scene
 from .. import randomize
 from ..scene import primitives as P
-from ..scene.assets import AssetError
 
 __all__ = ["Shape", "Shapes", "FrameLibrary", "Pool", "mesh_bytes"]
 
@@ -113,17 +112,11 @@ class Shapes:
             if kind == "asset" and entry.get("materials"):
                 # Materials by role (the entry names them): glass, chrome, rubber, trim replaced by
                 # materials that read as such; paint kept, and recorded for the paint randomizer.
-                from ..scene.vehicles import role_material
+                from ..scene.vehicles import material_roles, role_material
 
-                by_name = dict(zip(r.get("material_names", []), r["material_ids"]))
-                remap = {}
-                for name, role in entry["materials"].items():
-                    if name not in by_name:
-                        raise AssetError(f"asset '{value}': materials: the model has no material '{name}' (it has "
-                                         f"{', '.join(repr(n) for n in by_name) or 'none'})")
-                    roles.setdefault(role, []).append(int(by_name[name]))
-                    if role != "paint":
-                        remap[int(by_name[name])] = self._role(role, role_material)
+                roles = material_roles(value, entry, r.get("material_names", []), r["material_ids"])
+                remap = {m: self._role(role, role_material) for role, ids in roles.items() if role != "paint"
+                         for m in ids}
                 mids = np.asarray(arrays["material_ids"], np.int32)
                 arrays = dict(arrays, material_ids=np.array([remap.get(int(m), int(m)) for m in mids], np.int32))
                 if not any(k in entry for k in ("wheels", "plates", "lamps")):

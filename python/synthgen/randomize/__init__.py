@@ -15,6 +15,10 @@ Protocol (:class:`Randomizer`):
   object's material (a plate or sign first, decals before wear);
 - ``shape``: for randomizers that are the object (one of ``primitive`` / ``mesh`` /
   ``asset`` / ...): :meth:`Randomizer.make_shape` and :meth:`Randomizer.placement`;
+- :meth:`Randomizer.needs` -- why the randomizer cannot change an object of a model
+  (:class:`ModelParts`: the material roles, plate mounts and lamps it offers), or None; the run
+  refuses such an object (:meth:`Randomizer.refuse`, in ``apply``) and ``synthgen validate``
+  asks it of every model an entry can draw;
 - :meth:`Randomizer.apply` -- returns the object's new materials and its metadata record.
   An object has one material, or -- a model with materials of its own -- one per material
   of its mesh; a randomizer that wraps materials (wear, decals) wraps each, so the model
@@ -29,14 +33,14 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from dataclasses import dataclass
-from typing import Any, Dict, List, Mapping, Optional, Tuple
+from typing import Any, Dict, FrozenSet, List, Mapping, Optional, Tuple
 
 import numpy as np
 
 from .._core import SynthgenError
 from ..schema.fields import Field
 
-__all__ = ["Randomizer", "ObjectContext", "register", "randomizers", "randomizer", "discover",
+__all__ = ["Randomizer", "ObjectContext", "ModelParts", "register", "randomizers", "randomizer", "discover",
            "randomizer_modules", "INFRASTRUCTURE"]
 
 
@@ -65,6 +69,34 @@ class ObjectContext:
     roles: Optional[Dict[str, List[int]]] = None
 
 
+@dataclass(frozen=True)
+class ModelParts:
+    """What an object's model offers the randomizers that change parts of it: the roles of the
+    materials the object keeps (its library entry's ``materials``: none when the model is no
+    library vehicle or the object's ``material`` replaces its own), and whether its entry
+    declares plate mounts and lamps. The run reads them from the frame's shape
+    (:meth:`of_context`), ``synthgen validate`` from the asset's manifest entry and its
+    material names (:meth:`of_entry`), so both refuse the same objects."""
+
+    roles: FrozenSet[str] = frozenset()
+    plates: bool = False
+    lamps: bool = False
+
+    @classmethod
+    def of_context(cls, ctx: ObjectContext, materials: List[int]) -> "ModelParts":
+        keep = set(materials)
+        return cls(frozenset(r for r, ids in (ctx.roles or {}).items() if keep & set(ids)),
+                   bool(ctx.plates) and ctx.plate_material is not None,
+                   bool(ctx.lamps) and ctx.lamp_material is not None)
+
+    @classmethod
+    def of_entry(cls, entry: Mapping[str, Any], roles: Mapping[str, List[int]], replaced: bool) -> "ModelParts":
+        """``roles``: synthgen.scene.vehicles.material_roles of the model; ``replaced``: the
+        object's ``material`` replaces the model's own."""
+        return cls(frozenset() if replaced else frozenset(r for r, ids in roles.items() if ids),
+                   bool(entry.get("plates")), bool(entry.get("lamps")))
+
+
 class Randomizer:
     """Base class of the object randomizers (see the module docstring)."""
 
@@ -85,6 +117,17 @@ class Randomizer:
         (``shape`` randomizers): a post from the ground up to that height (behind the panel,
         up to its middle, so the panel sits on it at any size and shape)."""
         raise NotImplementedError
+
+    def needs(self, parts: ModelParts) -> Optional[str]:
+        """Why this randomizer cannot change an object whose model offers ``parts`` (None: it
+        can; the default: any model)."""
+        return None
+
+    def refuse(self, ctx: ObjectContext, materials: List[int]) -> None:
+        """SynthgenError ``objects[i].<key>: <reason>`` when :meth:`needs` refuses the object."""
+        why = self.needs(ModelParts.of_context(ctx, materials))
+        if why:
+            raise SynthgenError(f"objects[{ctx.spec.index}].{self.key}: {why}")
 
     def apply(self, ctx: ObjectContext, value: Any, materials: List[int]) -> Tuple[List[int], Any]:
         """Changes the object: ``materials`` are its material ids (one, or one per material of

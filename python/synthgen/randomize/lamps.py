@@ -21,11 +21,10 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple
 
 import numpy as np
 
-from .._core import SynthgenError
 from ..schema.fields import Bool, Choice, Number, Record
 from ..schema.random import R
 from ..scene.vehicles import LAMP_KINDS
-from . import ObjectContext, Randomizer, register
+from . import ModelParts, ObjectContext, Randomizer, register
 
 #: Luminance of a lit lens (cd/m^2), by kind and state.
 LUMINANCE = {"head.low": 1.0e5, "head.high": 4.0e5, "tail": 800.0, "brake": 8000.0, "indicator": 6000.0}
@@ -86,10 +85,13 @@ class Lamps(Randomizer):
     sample_order = 26
     apply_order = 26  # after the plates, before decals and wear (dirt on lenses too)
 
+    def needs(self, parts: ModelParts) -> Optional[str]:
+        if not parts.lamps:
+            return "its model declares no lamps (a library vehicle's `lamps` in assets_manifest)"
+        return None
+
     def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
-        if not ctx.lamps or ctx.lamp_material is None:
-            raise SynthgenError(f"objects[{ctx.spec.index}].lamps: its model declares no lamps (a library "
-                                f"vehicle's `lamps` in assets_manifest)")
+        self.refuse(ctx, materials)
         lit = lit_lamps(ctx.lamps, value)
         emitters: Dict[Tuple[str, str], int] = {}
         swap: Dict[int, int] = {}

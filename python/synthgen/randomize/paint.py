@@ -11,14 +11,13 @@ RGB. The colour drawn goes into the metadata."""
 from __future__ import annotations
 
 import colorsys
-from typing import Any, List, Mapping, Tuple
+from typing import Any, List, Mapping, Optional, Tuple
 
 import numpy as np
 
-from .._core import SynthgenError
 from ..schema.fields import Choice, Number, Record
 from ..schema.random import R
-from . import ObjectContext, Randomizer, register
+from . import ModelParts, ObjectContext, Randomizer, register
 
 #: (name, share, linear albedo of the base) of the ``cars`` palette.
 CARS = (
@@ -62,11 +61,15 @@ class Paint(Randomizer):
     sample_order = 22
     apply_order = 22  # before the plates, decals and wear (which wrap the paint)
 
+    def needs(self, parts: ModelParts) -> Optional[str]:
+        if "paint" not in parts.roles:
+            return ("its model names no paint material (a library vehicle's `materials: {<name>: paint}` in "
+                    "assets_manifest)")
+        return None
+
     def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
+        self.refuse(ctx, materials)
         paint = set(ctx.roles.get("paint", ())) if ctx.roles else set()
-        if not paint or not (paint & set(materials)):
-            raise SynthgenError(f"objects[{ctx.spec.index}].paint: its model names no paint material (a library "
-                                f"vehicle's `materials: {{<name>: paint}}` in assets_manifest)")
         name, albedo = draw(value["palette"], ctx.rng)
         mat = ctx.scene.add_material("coated", {"albedo": albedo, "roughness": float(value["roughness"]),
                                                 "ior": 1.5})

@@ -12,12 +12,12 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .._core import SynthgenError, TextureRef
+from .._core import TextureRef
 from ..schema.fields import REQUIRED, Bool, Choice, Record, String
 from ..schema.random import R
 from ..scene import plates as P
 from ..scene.vehicles import PLATE_MM
-from . import ObjectContext, Randomizer, register
+from . import ModelParts, ObjectContext, Randomizer, register
 
 SCHEMA = Record({
     "country": R(Choice(list(P.COUNTRIES), REQUIRED,
@@ -38,10 +38,13 @@ class Plates(Randomizer):
     sample_order = 25
     apply_order = 25  # after a sign or a shape plate, before decals and wear (dirt on plates too)
 
+    def needs(self, parts: ModelParts) -> Optional[str]:
+        if not parts.plates:
+            return "its model declares no plate mounts (a library vehicle's `plates` in assets_manifest)"
+        return None
+
     def apply(self, ctx: ObjectContext, value: Mapping[str, Any], materials: List[int]) -> Tuple[List[int], Any]:
-        if not ctx.plates or ctx.plate_material is None:
-            raise SynthgenError(f"objects[{ctx.spec.index}].plates: its model declares no plate mounts (a library "
-                                f"vehicle's `plates` in assets_manifest)")
+        self.refuse(ctx, materials)
         reg = P.random_registration(value["country"], ctx.rng)
         tex = P.render_plate(reg, px_per_mm=PX_PER_MM)
         linear = {"wrap": "clamp", "colorspace": "linear"}

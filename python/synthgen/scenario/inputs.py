@@ -5,11 +5,18 @@ as the frames), images, environment maps, assets (fetched and checksummed) and t
 generated signs and plates -- and creates every material and light whose parameters are
 constants, so a broken file or an impossible combination of parameters is reported once, by
 ``FILE:LINE:COLUMN: key.path: reason``, instead of failing every frame of a run.
+
+Every model an object entry can draw (each option of a ``choice`` of assets) is checked against
+every randomizer applied to the entry, by the run's own test (``Randomizer.needs``): paint needs
+a paint material, plates plate mounts, lamps lamps; a library entry's material roles must name
+materials of its model.
 """
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Dict, List, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+import numpy as np
 
 from .._core import Scene, SynthgenError
 from ..schema import distributions as D
@@ -25,6 +32,33 @@ def _options(v: Any) -> List[Any]:
     return list(v.options) if isinstance(v, D.Choice) else [v]
 
 
+def _drawable(v: Any) -> List[Any]:
+    """Every value ``v`` can take as far as choices go: the options of a choice (of choices),
+    those of weight 0 left out; any other value is itself."""
+    if isinstance(v, D.Choice):
+        return [x for o, p in zip(v.options, v.p) if p > 0 for x in _drawable(o)]
+    return [v]
+
+
+def _least(v: Any) -> Optional[np.ndarray]:
+    """The smallest value (per component) a number or vector can take, or None when a
+    distribution has no lower bound above 0."""
+    if isinstance(v, D.Choice):
+        opts = [_least(o) for o in _drawable(v)]
+        if not opts or any(o is None for o in opts):
+            return None
+        return np.min(np.broadcast_arrays(*opts), axis=0)
+    if isinstance(v, D.Broadcast):
+        return _least(v.inner)
+    if isinstance(v, (D.Uniform, D.IntUniform, D.LogUniform)):
+        return np.asarray(v.lo, np.float64)
+    if isinstance(v, D.Normal):
+        return None if v.lo is None else np.asarray(v.lo, np.float64)
+    if isinstance(v, D.Distribution):
+        return None
+    return np.asarray(v, np.float64)
+
+
 def _constant(tree: Any) -> bool:
     return not D.has_distribution(tree)
 
@@ -33,23 +67,25 @@ class _Checker:
     def __init__(self, sc: Scenario):
         self.ctx = ValidationContext(sc.source, sc.base_dir)
         self.scene = Scene()
-        self.seen: Dict[Tuple[str, str], None] = {}
+        self.seen: Dict[Tuple[str, str], Any] = {}   # (kind, path) -> what loading it returned
         self.fonts = False
+        self.asset_paths: Dict[str, str] = {}   # asset id -> its cached file
 
     def fail(self, loc: Loc, what: str, e: Exception) -> None:
         raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path, f"{what}: {e}") from None
 
-    def once(self, kind: str, path: str, loc: Loc, load: Callable[[], Any]) -> None:
+    def once(self, kind: str, path: str, loc: Loc, load: Callable[[], Any]) -> Any:
         if (kind, path) in self.seen:
-            return
+            return self.seen[(kind, path)]
         self.seen[(kind, path)] = None
         try:
-            load()
+            self.seen[(kind, path)] = load()
         except (SynthgenError, OSError) as e:
             self.fail(loc, f"cannot use this {kind}", e)
+        return self.seen[(kind, path)]
 
-    def mesh(self, path: str, loc: Loc) -> None:
-        self.once("mesh", path, loc, lambda: self.scene.load_mesh_file(path))
+    def mesh(self, path: str, loc: Loc) -> Any:
+        return self.once("mesh", path, loc, lambda: self.scene.load_mesh_file(path))
 
     def image(self, path: str, loc: Loc) -> None:
         self.once("image", path, loc, lambda: self.scene.add_texture("image", {"file": path}))
@@ -67,6 +103,7 @@ class _Checker:
                 path = assets.resolve(a)
             except (SynthgenError, OSError) as e:
                 self.fail(loc, f"cannot fetch asset '{a}'", e)
+            self.asset_paths[a] = path
             (self.mesh if kind == "mesh" else self.envmap)(path, loc)
 
     def texture_files(self, tree: Any, loc: Loc) -> None:
@@ -128,11 +165,12 @@ class _Checker:
                         self.asset(li["asset"], "hdr", li.locs.get("asset", li.loc))
 
     def objects(self, objects: List[Validated]) -> None:
-        for o in objects:
+        for i, o in enumerate(objects):
             if o.get("mesh") is not None:
                 self.mesh(str(o["mesh"]), o.locs["mesh"])
             if o.get("asset") is not None:
                 self.asset(o["asset"], "mesh", o.locs["asset"])
+            self.model_parts(i, o)
             if o.get("material") is not None:
                 self.plugin("material", o["material"], o.locs["material"])
             if o.get("sign") is not None or o.get("plate") is not None:
@@ -142,6 +180,88 @@ class _Checker:
                     self.image(str(d["image"]), d.locs["image"])
                 else:
                     self.fonts = True
+
+    def model_parts(self, i: int, o: Validated) -> None:
+        """Each model entry ``o`` can draw against each randomizer applied to it, by the run's
+        test (Randomizer.needs); an asset's material roles against its model's materials."""
+        from ..randomize import ModelParts, randomizers
+        from .schema import SHAPE_KEYS
+
+        applied = [r for r in randomizers() if any(v is not None for v in _drawable(o.get(r.key)))]
+        kind = next((k for k in SHAPE_KEYS if o.get(k) is not None), None)
+        if kind is None:
+            return
+        loc = o.locs.get(kind, o.loc)
+        replaced = any(v is not None for v in _drawable(o.get("material")))
+        # (what, its parts, its parts were its own materials kept)
+        models: List[Tuple[str, ModelParts, ModelParts]] = []
+        if kind == "asset":
+            from ..scene import assets
+            from ..scene.vehicles import material_roles
+
+            for a in _drawable(o["asset"]):
+                if a is None:
+                    continue
+                entry = assets.entry(a)
+                loaded = self.seen.get(("mesh", self.asset_paths.get(a, ""))) or {}
+                try:
+                    roles = material_roles(a, entry, loaded.get("material_names", []), loaded.get("material_ids", []))
+                except SynthgenError as e:
+                    raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path, str(e)) from None
+                models.append((f"asset '{a}'", ModelParts.of_entry(entry, roles, replaced),
+                               ModelParts.of_entry(entry, roles, False)))
+        else:
+            what = f"{kind} '{o[kind]}'" if kind in ("primitive", "mesh") else f"a {kind}"
+            models.append((what, ModelParts(), ModelParts()))
+        for what, parts, own in models:
+            for r in applied:
+                why = r.needs(parts)
+                if why:
+                    if not r.needs(own):
+                        why = f"objects[{i}].material replaces the model's own materials, which {r.key} needs"
+                    raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path,
+                                         f"{what} cannot take objects[{i}].{r.key}: {why}")
+
+    def footprints(self, objects: List[Validated]) -> List[Tuple[str, float, float]]:
+        """(what, length, width in metres) of the smallest object of each entry that stands on the
+        ground by itself (no rests_on, no pixel_height, a primitive, mesh or asset: not a sign or a
+        plate on its post), from its smallest size and scale; entries whose size has no lower bound
+        are left out."""
+        from ..scene.vehicles import AXES as AXIS_VECTORS
+
+        out = []
+        for i, o in enumerate(objects):
+            if o.get("rests_on") is not None or o.get("pixel_height") is not None:
+                continue
+            size, scale = _least(o["size"]), _least(o["scale"])
+            if size is None or scale is None:
+                continue
+            size = np.broadcast_to(size, (3,)) * float(scale)
+            if o.get("primitive") is not None:
+                for p in _drawable(o["primitive"]):
+                    dims = np.full(3, size[0]) if p == "sphere" else size
+                    out.append((f"objects[{i}] (a {p})", float(dims[0]), float(dims[2])))
+                continue
+            paths: List[Tuple[str, str, float, Dict[str, Any]]] = []
+            if o.get("mesh") is not None:
+                paths.append((f"mesh '{o['mesh']}'", str(o["mesh"]), 1.0, {}))
+            elif o.get("asset") is not None:
+                from ..scene import assets
+
+                for a in _drawable(o["asset"]):
+                    if a is not None and a in self.asset_paths:
+                        e = assets.entry(a)
+                        paths.append((f"asset '{a}'", self.asset_paths[a], float(e.get("scale", 1.0)), e))
+            for what, path, unit, entry in paths:
+                loaded = self.seen.get(("mesh", path))
+                if not loaded:
+                    continue
+                pos = np.asarray(self.scene.mesh_arrays(loaded["mesh_id"])["positions"], np.float64)
+                ext = (pos.max(axis=0) - pos.min(axis=0)) * unit if len(pos) else np.zeros(3)
+                fi = int(np.argmax(np.abs(AXIS_VECTORS[o.get("forward") or entry.get("forward", "+x")])))
+                ui = int(np.argmax(np.abs(AXIS_VECTORS[o.get("up") or entry.get("up", "+y")])))
+                out.append((f"objects[{i}] ({what})", float(ext[fi] * size[0]), float(ext[3 - fi - ui] * size[2])))
+        return out
 
     def check_fonts(self, loc: Loc) -> None:
         from ..scene import raster
@@ -156,9 +276,10 @@ class _Checker:
                           SynthgenError(f"{path} not found (Debian package fonts-dejavu-core)"))
 
 
-def check_inputs(sc: Scenario) -> Dict[str, int]:
+def check_inputs(sc: Scenario, warnings: Optional[List[str]] = None) -> Dict[str, int]:
     """Loads every input of ``sc`` once; SceneFileError at the YAML entry of the first
-    that cannot be used. Returns counts of what was checked."""
+    that cannot be used. Returns counts of what was checked; ``warnings`` (a list) receives
+    what is suspicious but would not fail (a photo's geometry)."""
     c = _Checker(sc)
     spec = sc.spec
     c.lights(spec["lights"], spec.locs.get("lights", spec.loc))
@@ -185,6 +306,7 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
             raise
         except (SynthgenError, OSError) as e:
             c.fail(loc, "cannot use this photo", e)
+        _check_photo_geometry(c, ps, bg, spec["objects"], warnings)
     _check_weather(sc, spec, ps)
     if c.fonts:
         c.check_fonts(spec.locs.get("objects", spec.loc))
@@ -192,6 +314,32 @@ def check_inputs(sc: Scenario) -> Dict[str, int]:
     for kind, _ in c.seen:
         kinds[kind] = kinds.get(kind, 0) + 1
     return kinds
+
+
+def _check_photo_geometry(c: _Checker, photos: Any, bg: Validated, objects: List[Validated],
+                          warnings: Optional[List[str]]) -> None:
+    """Each photo's geometry against the background's distances and the entries' smallest
+    footprints (synthgen.background.geometry): an error (nothing could be placed) is raised at
+    its calibration file's key, warnings go to ``warnings``."""
+    from ..background.geometry import geometry_findings
+
+    feet = c.footprints(objects)
+    seen: Dict[Any, Any] = {}  # photos of one size sharing a calibration have the same geometry: checked once
+    for i, path in enumerate(photos.paths):
+        setup = photos.setup(i)
+        cal = setup.calibration
+        key = (repr(cal.meta()), tuple(np.asarray(p, np.float64).tobytes() for p in setup.regions),
+               tuple(sorted(setup.where.items())))
+        if key in seen:
+            continue
+        seen[key] = None
+        for f in geometry_findings(setup, float(bg["min_distance"]), float(bg["max_distance"]), feet):
+            if f.error and f.line:
+                raise SceneFileError(f.file, f.line, f.column, f.key, f"{f.message} (photo {os.path.basename(path)})")
+            if f.error:
+                raise SynthgenError(f"{f} (photo {os.path.basename(path)})")
+            if warnings is not None:
+                warnings.append(f"{f} (photo {os.path.basename(path)})")
 
 
 def _check_weather(sc: Scenario, spec: Validated, photos: Any = None) -> None:

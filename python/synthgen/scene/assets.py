@@ -116,7 +116,7 @@ def load_manifest(directory: Optional[str] = None) -> Dict[str, Dict[str, Any]]:
             if "lods" in e:
                 _check_lods(e["lods"], f"{where} ({e['id']}): lods")
             if "materials" in e:
-                from .vehicles import ROLES
+                from .vehicle_parts import ROLES
 
                 if not isinstance(e["materials"], dict) or not all(v in ROLES for v in e["materials"].values()):
                     raise AssetError(f"{where} ({e['id']}): materials: expected {{material name: role}}, the roles "
@@ -184,7 +184,7 @@ def _check_plates(p: Any, where: str) -> None:
 
 def _check_lamps(p: Any, where: str) -> None:
     """A vehicle's lamps: {kind: {height (m, > 0), offset (m, >= 0), size ([w, h] m, > 0)}}."""
-    from .vehicles import LAMP_KINDS
+    from .vehicle_parts import LAMP_KINDS
 
     if not isinstance(p, dict) or not p:
         raise AssetError(f"{where}: expected a mapping {{kind: {{height, offset, size}}}}")

@@ -46,22 +46,14 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-__all__ = ["AXES", "PLATE_MM", "ROLES", "LAMP_KINDS", "lamp_names", "lamp_lenses", "role_material", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
+from .assets import AssetError
+from .vehicle_parts import LAMP_KINDS, ROLES
+
+__all__ = ["AXES", "PLATE_MM", "ROLES", "LAMP_KINDS", "lamp_names", "lamp_lenses", "role_material", "material_roles", "model_axes", "revolve", "wheel_mesh", "crease_normals", "ray_mesh", "plate_mounts",
            "body_lift", "build_vehicle"]
 
 #: The mounting rectangle of a plate (EU and Russian plates: 520 x 112 / 110 mm).
 PLATE_MM = (520.0, 112.0)
-
-#: Lamp kinds: the end they are at (+1 front, -1 rear), their default size (width, height in
-#: metres), the colour of the unlit lens (linear RGB albedo) and of the light (linear RGB, its
-#: luminance normalised to 1). Their luminance when lit is the ``lamps`` randomizer's.
-LAMP_KINDS: Dict[str, Dict[str, Any]] = {
-    "head": {"end": 1.0, "size": (0.22, 0.10), "lens": (0.55, 0.55, 0.55), "light": (1.0, 0.97, 0.9)},
-    "tail": {"end": -1.0, "size": (0.16, 0.08), "lens": (0.22, 0.012, 0.01), "light": (1.0, 0.02, 0.005)},
-    "brake": {"end": -1.0, "size": (0.12, 0.06), "lens": (0.22, 0.012, 0.01), "light": (1.0, 0.02, 0.005)},
-    "indicator_front": {"end": 1.0, "size": (0.07, 0.05), "lens": (0.5, 0.22, 0.02), "light": (1.0, 0.42, 0.0)},
-    "indicator_rear": {"end": -1.0, "size": (0.07, 0.05), "lens": (0.5, 0.22, 0.02), "light": (1.0, 0.42, 0.0)},
-}
 
 #: Lens grid: vertices across and up each lamp (cast onto the body one by one).
 _LENS_GRID = (9, 5)
@@ -71,10 +63,6 @@ AXES = {"+x": (1.0, 0.0, 0.0), "-x": (-1.0, 0.0, 0.0), "+y": (0.0, 1.0, 0.0), "-
         "+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0)}
 
 
-#: Roles a library entry can give a model's materials.
-ROLES = ("paint", "glass", "chrome", "rubber", "trim")
-
-
 def role_material(role: str) -> Tuple[str, Dict[str, Any]]:
     """(plugin, parameters) of the material of a role (not paint, which keeps the model's
     colour until the paint randomizer draws one)."""
@@ -82,6 +70,22 @@ def role_material(role: str) -> Tuple[str, Dict[str, Any]]:
             "chrome": ("conductor", {"metal": "chrome", "roughness": 0.06}),
             "rubber": ("coated", {"albedo": 0.025, "roughness": 0.75, "specular": 0.4}),
             "trim": ("coated", {"albedo": 0.03, "roughness": 0.45, "specular": 0.6})}[role]
+
+
+def material_roles(asset_id: str, entry: Mapping[str, Any], material_names: Sequence[str],
+                   material_ids: Sequence[int]) -> Dict[str, List[int]]:
+    """{role: the model's material ids} of a library entry's ``materials`` ({name in the model:
+    role}), given the model's material names and ids as its import returns them (the frame's
+    shapes and ``synthgen validate`` both read the roles here). AssetError naming a material
+    the model does not have."""
+    by_name = dict(zip(material_names, material_ids))
+    roles: Dict[str, List[int]] = {}
+    for name, role in (entry.get("materials") or {}).items():
+        if name not in by_name:
+            raise AssetError(f"asset '{asset_id}': materials: the model has no material '{name}' (it has "
+                             f"{', '.join(repr(n) for n in by_name) or 'none'})")
+        roles.setdefault(role, []).append(int(by_name[name]))
+    return roles
 
 
 def model_axes(forward: str = "+x", up: str = "+y") -> np.ndarray:
