@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import signal
 import subprocess
 import tempfile
 from typing import Any, Dict, List, Optional
@@ -27,7 +28,7 @@ from .. import _core
 from .._core import Scene, SynthgenError
 
 __all__ = ["ExtensionError", "load_extension", "compile_extension", "header_dir", "compiler", "cache_dir",
-           "loaded_extensions", "example", "NOT_ALLOWED"]
+           "loaded_extensions", "example", "exit_description", "NOT_ALLOWED"]
 
 #: Flags of every compile (the cache key includes them).
 _FLAGS = ["-O2", "-shared", "-fPIC", "-std=c11", "-fvisibility=hidden", "-Wall",
@@ -153,6 +154,17 @@ def load_extension(path: str, scene: Optional[Scene] = None) -> Dict[str, Any]:
     if scene is not None:
         scene.note_extension(info["source"], info["sha256"], _read_source(info["source"]))
     return info
+
+
+def exit_description(exitcode: Optional[int]) -> str:
+    """How a process that ran extension code ended, from its exit code (multiprocessing's:
+    negative for a signal): " (killed by SIGSEGV)", " (exit code 3)" or ""."""
+    if exitcode is not None and exitcode < 0:
+        try:
+            return f" (killed by {signal.Signals(-exitcode).name})"
+        except ValueError:
+            return f" (killed by signal {-exitcode})"
+    return f" (exit code {exitcode})" if exitcode is not None else ""
 
 
 def loaded_extensions() -> List[Dict[str, Any]]:
