@@ -163,6 +163,9 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         if scheduler is not None and not interrupted:
             executor.shutdown()
     wall = time.perf_counter() - t0
+    if scheduler is None:
+        # Local workers are gone: a worker killed (Ctrl-C, a time limit) may have been writing.
+        remove_temporaries(out_dir)
     complete = completed_frames(out_dir)
     finished = [k for k in complete if k < n or only is not None]
     sp = sc.spec["split"]
