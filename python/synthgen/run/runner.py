@@ -99,7 +99,9 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     ``failed/``: ``synthgen replay`` renders it again); ``frame_timeout``: seconds a frame may
     take before its worker is killed and the frame reported failed (None or 0: no limit; local
     workers only); ``isolate``: False renders the frames of one worker in this process (no
-    protection from crashes and hangs, no time limit: for debuggers and tests)."""
+    protection from crashes and hangs, no time limit: for debuggers and tests). Worker processes
+    are spawned: a script calling this needs multiprocessing's ``if __name__ == "__main__":``
+    guard."""
     sc = load_scenario(scenario_path, overrides, allow_extensions)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once (extensions' code: isolated)
     n = int(count) if count is not None else sc.count
