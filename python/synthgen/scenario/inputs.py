@@ -267,6 +267,11 @@ def _check_isolated(sc: Scenario, timeout: float) -> Dict[str, int]:
             except EOFError:
                 proc.join()
                 how = exit_description(proc.exitcode)
+                if proc.exitcode is not None and proc.exitcode > 0:  # Python's own exit, its traceback on stderr
+                    raise SynthgenError(f"{sc.source}: the process checking the scenario (it has extensions) ended"
+                                        f"{how} before it reported, with the error printed above (a script needs "
+                                        "multiprocessing's `if __name__ == \"__main__\":` guard: the process is "
+                                        "spawned)") from None
                 if not note[3]:
                     raise SynthgenError(f"{sc.source}: the check of the scenario's inputs crashed its process{how} "
                                         "outside any extension's code") from None
