@@ -260,6 +260,21 @@ def test_undeclared_function_is_a_compile_error(tmp_path):
         sg.Scene().load_extension(path)
 
 
+def test_a_crash_while_loading_is_an_error_naming_the_file(tmp_path):
+    """synthgen_extension() is the extension's code too: a new library is loaded in a child
+    process first, so that its crash is an error here instead of this process's end."""
+    path = _write(tmp_path, "load_crash.c", """
+        #include <stdint.h>
+        SG_EXT_EXPORT const sg_ext_library* synthgen_extension(void) {
+          volatile uintptr_t zero = 0;
+          return *(const sg_ext_library* volatile*)zero;  /* a null-pointer read: SIGSEGV */
+        }
+        """)
+    with pytest.raises(ExtensionError, match=r"load_crash\.c: loading the extension crashed its process \(killed by "
+                                             r"SIGSEGV\) \(its synthgen_extension\(\) or a constructor"):
+        sg.Scene().load_extension(path)
+
+
 def test_nan_output_fails_the_render_naming_the_extension(tmp_path):
     path = _write(tmp_path, "nan_tex.c", GOOD_TEX % ("q->p[0] < -0.5f ? NAN : 0.5f", "nan_tex", 1,
                                                        "SG_EXT_ABI_VERSION"))
