@@ -152,7 +152,7 @@ def _probe(info: Dict[str, Any]) -> None:
     if os.path.isfile(marker):
         return
     package_parent = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([package_parent, os.environ.get("PYTHONPATH", "")]))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in [package_parent, os.environ.get("PYTHONPATH")] if p))
     code = "import sys; from synthgen import _core; _core.load_extension_library(sys.argv[1], sys.argv[2])"
     try:
         out = subprocess.run([sys.executable, "-c", code, lib, info["source"]], capture_output=True, text=True,
