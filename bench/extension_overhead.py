@@ -67,7 +67,9 @@ count: {count}
 resolution: [160, 120]
 allow_extensions: true
 extensions: [{rust}]
-camera: {{fov_y: 45, pose: {{type: orbit, target: [0, 0.3, 0], distance: 5, elevation: 25, azimuth: {{uniform: [0, 360]}}}}}}
+camera:
+  fov_y: 45
+  pose: {{type: orbit, target: [0, 0.3, 0], distance: 5, elevation: 25, azimuth: {{uniform: [0, 360]}}}}
 lights: [{{type: sky, elevation: 40, azimuth: 130}}]
 ground: {{size: 20, material: {{type: diffuse, albedo: {{texture: {{type: rust_color, seed: {{int: [0, 100]}}}}}}}}}}
 objects: [{{class: box, primitive: box, size: [0.8, 0.8, 0.8], material: {{type: diffuse, albedo: 0.5}}}}]

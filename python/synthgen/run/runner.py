@@ -82,8 +82,8 @@ class RunSummary(dict):
             lines.append(self["aborted"])
         if self.get("interrupted"):
             left = self.get("requested", 0) - self.get("complete_requested", 0)
-            lines.append(f"interrupted: {self['rendered']} frame(s) finished in this run, {self['complete']} complete in "
-                         f"the directory and kept; the same command with --resume renders the {left} missing")
+            lines.append(f"interrupted: {self['rendered']} frame(s) finished in this run, {self['complete']} complete "
+                         f"in the directory and kept; the same command with --resume renders the {left} missing")
         return "\n".join(lines)
 
 
