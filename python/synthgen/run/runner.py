@@ -102,6 +102,9 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     protection from crashes and hangs, no time limit: for debuggers and tests). Worker processes
     are spawned: a script calling this needs multiprocessing's ``if __name__ == "__main__":``
     guard."""
+    if not isolate and (workers > 1 or scheduler is not None):
+        raise SynthgenError("--in-process (isolate=False) renders in this process: not with --workers above 1 or "
+                            "--scheduler")
     sc = load_scenario(scenario_path, overrides, allow_extensions)  # validate before anything renders ...
     check_inputs(sc)                   # ... and load every input file once (extensions' code: isolated)
     n = int(count) if count is not None else sc.count
