@@ -11,14 +11,26 @@ edges and blend textures) and rusted by the same preset on the example extension
 ``extension_vs_builtin_overhead_pct=<float>`` (the extension rust's render time over the
 built-in's, minus 1; target <= 10).
 
-    .venv/bin/python bench/extension_overhead.py [--runs 3] [--spp 32]
+Then the cost of isolation (docs/extensions.md: ``synthgen run`` renders in a worker process
+even with one worker, so that an extension's crash or loop fails only its frame): a small
+scenario whose ground is rusted by rust.c (``--isolation-frames`` frames, 160x120, 8 spp) run by
+synthgen.run.run in this process (``isolate=False``, the FrameRenderer built anew each run) and
+in a worker process (the default), with 1 frame and with N frames, interleaved, median of
+--runs. Overhead = a + b x frames: ``isolation_overhead_s_per_run=<a>`` (the worker's start, its
+imports and scenario load) and ``isolation_overhead_s_per_frame=<b>`` (the result's way back),
+``isolation_overhead_pct=<float>`` (of the in-process N-frame run's wall time).
+
+    .venv/bin/python bench/extension_overhead.py [--runs 3] [--spp 32] [--part all|render|isolation]
 """
 from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import statistics
 import sys
+import tempfile
+import time
 
 import numpy as np
 
@@ -38,7 +50,73 @@ def main(argv=None) -> int:
     ap.add_argument("--spp", type=int, default=32)
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--height", type=int, default=480)
+    ap.add_argument("--part", choices=("all", "render", "isolation"), default="all")
+    ap.add_argument("--isolation-frames", type=int, default=4)
     args = ap.parse_args(argv)
+    if args.part in ("all", "render"):
+        render_comparison(args)
+    if args.part in ("all", "isolation"):
+        isolation_cost(args)
+    return 0
+
+
+ISOLATION_SCENARIO = """
+version: 1
+seed: 3
+count: {count}
+resolution: [160, 120]
+allow_extensions: true
+extensions: [{rust}]
+camera:
+  fov_y: 45
+  pose: {{type: orbit, target: [0, 0.3, 0], distance: 5, elevation: 25, azimuth: {{uniform: [0, 360]}}}}
+lights: [{{type: sky, elevation: 40, azimuth: 130}}]
+ground: {{size: 20, material: {{type: diffuse, albedo: {{texture: {{type: rust_color, seed: {{int: [0, 100]}}}}}}}}}}
+objects: [{{class: box, primitive: box, size: [0.8, 0.8, 0.8], material: {{type: diffuse, albedo: 0.5}}}}]
+placement: {{region: [-1, -1, 1, 1]}}
+render: {{spp: 8, max_depth: 4}}
+outputs: [rgb, instance, coco]
+"""
+
+
+def isolation_cost(args) -> None:
+    """synthgen run in this process against in a worker process (see the module doc)."""
+    from synthgen.run import run, task
+    from synthgen.scene import extensions
+
+    n = max(2, args.isolation_frames)
+    work = tempfile.mkdtemp(prefix="synthgen-isolation-")
+    try:
+        path = os.path.join(work, "rust_ground.yaml")
+        with open(path, "w") as f:
+            f.write(ISOLATION_SCENARIO.format(count=n, rust=extensions.example("rust")))
+        print(f"scenario: 160x120, 8 spp, ground rusted by rust.c; 1 and {n} frames; synthgen.run.run in this "
+              f"process and in a worker process; median of {args.runs} interleaved runs")
+        walls = {(iso, k): [] for iso in (False, True) for k in (1, n)}
+        for r in range(args.runs + 1):  # the first round warms the caches (compiled extension, imports)
+            for (iso, k) in walls:
+                task._WORKER.clear()  # in this process, as in a fresh one: the FrameRenderer built again
+                out = os.path.join(work, f"out-{r}-{int(iso)}-{k}")
+                t0 = time.perf_counter()
+                s = run(path, out, count=k, progress=False, allow_extensions=True, isolate=iso)
+                wall = time.perf_counter() - t0
+                assert s["rendered"] == k and not s["failures"], s.text()
+                if r:
+                    walls[(iso, k)].append(wall)
+                shutil.rmtree(out)
+        med = {key: statistics.median(v) for key, v in walls.items()}
+        for (iso, k), v in sorted(med.items()):
+            print(f"{'worker_process' if iso else 'in_process'}_{k}_frames_wall_s={v:.3f}")
+        over_1, over_n = med[(True, 1)] - med[(False, 1)], med[(True, n)] - med[(False, n)]
+        per_frame = (over_n - over_1) / (n - 1)
+        print(f"isolation_overhead_s_per_run={over_1 - per_frame:.3f}")
+        print(f"isolation_overhead_s_per_frame={per_frame:.3f}")
+        print(f"isolation_overhead_pct={100.0 * over_n / med[(False, n)]:.1f}")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def render_comparison(args) -> None:
     sg.load_image_plugin()
     wear.rust_extension = wear_ext.rust  # build() looks presets up by name in synthgen.wear
     scenes = {}
@@ -63,7 +141,6 @@ def main(argv=None) -> int:
     print(f"extension_rust_vs_grey_overhead_pct={100.0 * (med['rust_extension'] / med['grey'] - 1.0):.1f}")
     print(f"psnr_extension_vs_builtin_db={psnr:.2f}")
     print(f"extension_vs_builtin_overhead_pct={100.0 * (med['rust_extension'] / med['rust'] - 1.0):.1f}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -4,10 +4,12 @@ and bad extensions' errors."""
 from __future__ import annotations
 
 import os
+import re
 import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -258,6 +260,21 @@ def test_undeclared_function_is_a_compile_error(tmp_path):
         sg.Scene().load_extension(path)
 
 
+def test_a_crash_while_loading_is_an_error_naming_the_file(tmp_path):
+    """synthgen_extension() is the extension's code too: a new library is loaded in a child
+    process first, so that its crash is an error here instead of this process's end."""
+    path = _write(tmp_path, "load_crash.c", """
+        #include <stdint.h>
+        SG_EXT_EXPORT const sg_ext_library* synthgen_extension(void) {
+          volatile uintptr_t zero = 0;
+          return *(const sg_ext_library* volatile*)zero;  /* a null-pointer read: SIGSEGV */
+        }
+        """)
+    with pytest.raises(ExtensionError, match=r"load_crash\.c: loading the extension crashed its process \(killed by "
+                                             r"SIGSEGV\) \(its synthgen_extension\(\) or a constructor"):
+        sg.Scene().load_extension(path)
+
+
 def test_nan_output_fails_the_render_naming_the_extension(tmp_path):
     path = _write(tmp_path, "nan_tex.c", GOOD_TEX % ("q->p[0] < -0.5f ? NAN : 0.5f", "nan_tex", 1,
                                                        "SG_EXT_ABI_VERSION"))
@@ -367,48 +384,73 @@ static const sg_ext_param params[] = {
     {"crash", SG_EXT_FLOAT, {0.f}, 0.f, 1.f, "a per-frame draw"},
     {"above", SG_EXT_FLOAT, {2.f}, 0.f, 2.f, "crash when crash > above"},
     {"address", SG_EXT_FLOAT, {0.f}, 0.f, 0.f, "the address written to"},
+    {"anywhere", SG_EXT_FLOAT, {0.f}, 0.f, 1.f, "1: also while the average is estimated (at creation)"},
+    {"loop", SG_EXT_FLOAT, {0.f}, 0.f, 1.f, "1: loop forever instead of crashing"},
 };
 static void f(const sg_ext_point* q, const float* a, const sg_ext_host* h, float* out) {
-  if (a[0] > a[1] && q->p[0] < -0.01f) {  /* in the render, not while the average is estimated (p >= 0) */
+  /* in the render, not while the average is estimated (p >= 0), unless anywhere */
+  if (a[0] > a[1] && (a[3] > 0.5f || q->p[0] < -0.01f)) {
+    volatile float forever = a[4];
+    while (forever > 0.5f) {
+    }
     volatile int* p = (volatile int*)(uintptr_t)a[2];
     *p = 1;  /* a real null-pointer write: SIGSEGV */
   }
   out[0] = 0.5f;
 }
-static const sg_ext_texture tex[] = {{"crash_tex", "crashes", 1, 0, params, 3, f, 0}};
+static const sg_ext_texture tex[] = {{"crash_tex", "crashes", 1, 0, params, 5, f, 0}};
 SG_EXT_EXPORT const sg_ext_library* synthgen_extension(void) {
   static const sg_ext_library lib = {SG_EXT_ABI_VERSION, tex, 1, 0, 0};
   return &lib;
 }
 """
 
+TINY = os.path.join(os.path.dirname(__file__), "scenarios", "tiny.yaml")
 
-def test_a_crash_inside_an_extension_fails_only_its_frame(tmp_path):
-    """A segfault in a user's C code in a worker process: that frame is reported failed (the
-    worker died, again when rendered alone), every other frame is rendered and complete."""
-    from synthgen import run as runner
-    from synthgen.outputs.meta import frame_status
+
+def _crash_scenario(tmp_path, texture: str, count: int = 6) -> str:
+    """tiny.yaml (``count`` frames) with the ground's albedo the texture ``{type: crash_tex,
+    TEXTURE}`` of CRASH_C."""
+    crash = _write(tmp_path, "crash.c", CRASH_C)
+    text = open(TINY, encoding="utf-8").read().replace("count: 6", f"count: {count}")
+    old = "ground: {size: 20, material: {type: diffuse, albedo: {uniform: [[0.2, 0.2, 0.2], [0.5, 0.5, 0.5]]}}}"
+    assert old in text
+    text = text.replace(old, "ground: {size: 20, material: {type: diffuse, albedo: {texture: {type: crash_tex, "
+                             + texture + "}}}}")
+    path = tmp_path / "crash.yaml"
+    path.write_text(text + f"allow_extensions: true\nextensions: [{crash}]\n")
+    return str(path)
+
+
+def _some_frames_fail(tmp_path, options: str, count: int = 6):
+    """A scenario whose extension texture crashes (or loops) in some of its frames, by a per-frame
+    draw: (its path, those frames)."""
     from synthgen.scenario import load_scenario, sample_frame
 
-    crash = _write(tmp_path, "crash.c", CRASH_C)
-    tiny = os.path.join(os.path.dirname(__file__), "scenarios", "tiny.yaml")
-    text = open(tiny, encoding="utf-8").read()
-    text = text.replace("ground: {size: 20, material: {type: diffuse, albedo: {uniform: [[0.2, 0.2, 0.2], [0.5, 0.5, "
-                        "0.5]]}}}",
-                        "ground: {size: 20, material: {type: diffuse, albedo: {texture: {type: crash_tex, crash: "
-                        "{uniform: [0, 1]}, above: ABOVE}}}}")
-    text += f"allow_extensions: true\nextensions: [{crash}]\n"
-    path = tmp_path / "crash.yaml"
-    path.write_text(text.replace("ABOVE", "2"))
-    sc = load_scenario(str(path), allow_extensions=True)
+    path = _crash_scenario(tmp_path, "crash: {uniform: [0, 1]}, above: 2" + options, count)
+    sc = load_scenario(path, allow_extensions=True)
     draws = {k: v for k in range(sc.count) for key, v in sample_frame(sc, k).sampled.items() if "crash" in key}
     assert len(draws) == sc.count
     above = float(np.median(list(draws.values())))
-    crashing = {k for k, v in draws.items() if v > above}
-    assert 0 < len(crashing) < sc.count
-    path.write_text(text.replace("ABOVE", repr(above)))
+    failing = {k for k, v in draws.items() if v > above}
+    assert 0 < len(failing) < sc.count
+    text = open(path, encoding="utf-8").read().replace("above: 2", f"above: {above!r}")
+    open(path, "w", encoding="utf-8").write(text)
+    return path, failing
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_a_crash_inside_an_extension_fails_only_its_frame(tmp_path, workers):
+    """A segfault in a user's C code in a worker process -- with one worker (the default) too: that
+    frame is reported failed (the worker died, again when rendered alone), every other frame is
+    rendered and complete."""
+    from synthgen import run as runner
+    from synthgen.outputs.meta import frame_status
+
+    n = 6 if workers > 1 else 4
+    path, crashing = _some_frames_fail(tmp_path, "", count=n)
     out = str(tmp_path / "out")
-    s = runner.run(str(path), out, workers=2, progress=False, allow_extensions=True)
+    s = runner.run(path, out, workers=workers, progress=False, allow_extensions=True)
     failed = {f["frame"]: f["error"] for f in s["failures"]}
     assert set(failed) == crashing, s.text()
     for k, err in failed.items():
@@ -417,12 +459,130 @@ def test_a_crash_inside_an_extension_fails_only_its_frame(tmp_path):
     # process, it crashes the same way (what a bug report carries).
     journals = [f["journal"] for f in s["failures"]]
     assert all(j.endswith(".journal") and os.path.isfile(j + ".bin") for j in journals), journals
+    complete, broken = frame_status(out)
+    assert set(complete) == set(range(n)) - crashing and not broken
+    if workers == 1:
+        return
     proc = subprocess.run([sys.executable, "-m", "synthgen", "replay", journals[0], "-o", str(tmp_path / "r"),
                            "--allow-extensions"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == -signal.SIGSEGV, (proc.returncode, proc.stderr[-2000:])
-    complete, broken = frame_status(out)
-    assert set(complete) == set(range(sc.count)) - crashing and not broken
     assert s["task_bytes"] < 200 < s["shared_bytes"]
+
+
+def test_a_crash_while_a_texture_is_created_fails_only_its_frames(tmp_path):
+    """The crash in the texture's first evaluation (its average, when a frame creates it): the
+    frames whose draw creates it fail, the others are written."""
+    from synthgen import run as runner
+    from synthgen.outputs.meta import frame_status
+
+    path, crashing = _some_frames_fail(tmp_path, ", anywhere: 1", count=4)
+    s = runner.run(path, str(tmp_path / "out"), progress=False, allow_extensions=True)
+    failed = {f["frame"]: f["error"] for f in s["failures"]}
+    assert set(failed) == crashing, s.text()
+    assert all("WorkerDied" in e and "SIGSEGV" in e for e in failed.values()), failed
+    complete, broken = frame_status(str(tmp_path / "out"))
+    assert set(complete) == set(range(4)) - crashing and not broken
+
+
+def test_validate_names_the_extension_that_crashes_when_first_evaluated(tmp_path, capsys):
+    """A texture with constant parameters is created by `synthgen validate` (and before a run
+    renders anything): a crash in its first evaluation is an error at its entry, naming the
+    texture and the extension's file, instead of killing the command."""
+    from synthgen import cli
+    from synthgen import run as runner
+
+    path = _crash_scenario(tmp_path, "crash: 1, above: 0, anywhere: 1", count=2)
+    assert cli.main(["validate", path, "--allow-extensions"]) == 2
+    err = capsys.readouterr().err
+    expected = (r"crash\.yaml:14:\d+: ground\.material: the texture 'crash_tex' of the extension \S*crash\.c crashed "
+                r"its process \(killed by SIGSEGV\) in its first evaluation")
+    assert re.search(expected, err), err
+    with pytest.raises(sg.SceneFileError, match=expected):
+        runner.run(path, str(tmp_path / "out"), progress=False, allow_extensions=True)
+
+
+def test_an_extension_that_loops_when_first_evaluated_is_an_error(tmp_path):
+    from synthgen.scenario import check_inputs, load_scenario
+
+    sc = load_scenario(_crash_scenario(tmp_path, "crash: 1, above: 0, anywhere: 1, loop: 1", count=2),
+                       allow_extensions=True)
+    with pytest.raises(sg.SceneFileError, match=r"crash\.yaml:14:\d+: ground\.material: the texture 'crash_tex' of "
+                                                r"the extension \S*crash\.c did not finish its first evaluation .* "
+                                                r"within 2 s"):
+        check_inputs(sc, timeout=2.0)
+
+
+def test_a_frame_that_loops_forever_times_out_and_the_run_goes_on(tmp_path):
+    from synthgen import run as runner
+    from synthgen.outputs.meta import frame_status
+
+    path, looping = _some_frames_fail(tmp_path, ", loop: 1", count=2)
+    # A limit well above a frame's time here (its worker's start included), under load too.
+    s = runner.run(path, str(tmp_path / "out"), progress=False, allow_extensions=True, frame_timeout=12.0)
+    failed = {f["frame"]: f for f in s["failures"]}
+    assert set(failed) == looping, s.text()
+    for k, f in failed.items():
+        assert f["error"].startswith(f"TimedOut: frame {k} timed out after 12 s"), f["error"]
+        assert f["journal"].endswith(".journal") and os.path.isfile(f["journal"] + ".bin")
+    complete, broken = frame_status(str(tmp_path / "out"))
+    assert set(complete) == {0, 1} - looping and not broken
+
+
+def _interrupt(cmd, started) -> tuple:
+    """Runs ``synthgen CMD`` in its own process group, sends it SIGINT (Ctrl-C) once
+    ``started(stdout line)`` says so: (exit status, output, seconds from SIGINT to exit)."""
+    # SIGINT at its default (a test run from a background job ignores it, and so would the child).
+    p = subprocess.Popen([sys.executable, "-m", "synthgen", *cmd], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                         text=True, start_new_session=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        lines = []
+        while not started(lines):
+            line = p.stdout.readline()
+            assert line or p.poll() is None, "".join(lines)
+            lines.append(line)
+        time.sleep(1.0)  # into the render
+        t0 = time.monotonic()
+        os.killpg(p.pid, signal.SIGINT)
+        out, _ = p.communicate(timeout=60)
+        return p.returncode, "".join(lines) + out, time.monotonic() - t0
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait()
+
+
+LOOP_SCENE = """
+version: 1
+allow_extensions: true
+extensions: [{path}]
+camera: {{width: 32, height: 24, fov_y: 40, look_at: {{eye: [0, 1, -4], target: [0, 0.5, 0]}}}}
+textures: {{t: {{type: crash_tex, crash: 1, above: 0, loop: 1}}}}
+materials: {{m: {{type: diffuse, albedo: {{texture: t}}}}}}
+objects: [{{primitive: plane, size: [20, 20], class_id: 1, material: m}}]
+lights: [{{type: sun, direction: [0, 1, 0], irradiance: 2}}]
+render: {{spp: 2}}
+"""
+
+
+def test_ctrl_c_stops_a_run_and_a_render_in_an_endless_loop(tmp_path):
+    """Every frame loops forever in the render: Ctrl-C still ends the run (the parent kills its
+    worker) and `synthgen render` (its render in native code, in this process) at once."""
+    path = _crash_scenario(tmp_path, "crash: 1, above: 0, loop: 1", count=3)
+    out = tmp_path / "out"
+    rc, text, seconds = _interrupt(["run", path, "-o", str(out), "--allow-extensions"],
+                                   lambda lines: (out / "run_manifest.json").exists())
+    assert rc == 130, text
+    assert seconds < 5.0, (seconds, text)
+    assert ("interrupted: 0 frame(s) finished in this run, 0 complete in the directory and kept; the same command "
+            "with --resume renders the 3 missing") in text, text
+    scene = tmp_path / "loop_scene.yaml"
+    scene.write_text(LOOP_SCENE.format(path=_write(tmp_path, "crash.c", CRASH_C)))
+    rc, text, seconds = _interrupt(["render", str(scene), "-o", str(tmp_path / "r"), "--allow-extensions"],
+                                   lambda lines: any("spp" in x for x in lines))
+    assert rc == 130 and "interrupted" in text, text
+    assert seconds < 5.0, (seconds, text)
+    assert not (tmp_path / "r").exists()
 
 
 def test_a_changed_extension_replaces_its_plugins_and_old_objects_keep_their_code(tmp_path):

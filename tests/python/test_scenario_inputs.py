@@ -93,7 +93,8 @@ def test_a_run_whose_frames_all_fail_alike_stops_early(tmp_path, monkeypatch):
         raise SynthgenError("the same problem every time")
 
     monkeypatch.setattr(FrameRenderer, "render", broken)
-    s = runner.run(scenario(tmp_path, "{class: b, primitive: box}"), str(tmp_path / "ds"), count=40, progress=False)
+    s = runner.run(scenario(tmp_path, "{class: b, primitive: box}"), str(tmp_path / "ds"), count=40, progress=False,
+                   isolate=False)  # (the monkeypatch is in this process)
     assert len(s["failures"]) == runner.ABORT_AFTER and "stopped after 3 frames" in s.text()
 
 

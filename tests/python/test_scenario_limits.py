@@ -94,9 +94,11 @@ def test_debug_shows_a_failed_frames_traceback(tmp_path, capsys, monkeypatch):
 
     monkeypatch.setattr(FrameRenderer, "render", broken)
     path = write(tmp_path, "objects: [{class: a, primitive: box}]\nresolution: [16, 12]\n")
-    assert cli.main(["run", path, "-o", str(tmp_path / "a"), "-n", "1", "--no-progress"]) == 1
+    # (--in-process: the monkeypatch is in this process)
+    assert cli.main(["run", path, "-o", str(tmp_path / "a"), "-n", "1", "--no-progress", "--in-process"]) == 1
     out = capsys.readouterr().out
     assert "frame trouble" in out and "Traceback" not in out
-    assert cli.main(["--debug", "run", path, "-o", str(tmp_path / "b"), "-n", "1", "--no-progress"]) == 1
+    assert cli.main(["--debug", "run", path, "-o", str(tmp_path / "b"), "-n", "1", "--no-progress",
+                     "--in-process"]) == 1
     out = capsys.readouterr().out
     assert "Traceback" in out and "in broken" in out

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from typing import Any, Dict
+import threading
+from typing import Any, Callable, Dict, TypeVar
 
 from ..schema.plugins import plugin_info
 
@@ -33,6 +34,16 @@ def nonnegative_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {text!r}") from None
     if v < 0:
         raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {v}")
+    return v
+
+
+def nonnegative_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text!r}") from None
+    if not v >= 0.0 or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a non-negative number, got {text}")
     return v
 
 
@@ -127,6 +138,41 @@ def say(text: str) -> None:
         os.close(devnull)
 
 
+T = TypeVar("T")
+
+
+def interruptible(fn: Callable[[], T]) -> T:
+    """``fn()`` (a render, a scene's building) in a thread, while this, the main thread, waits
+    for it: Ctrl-C ends the process within a second (exit 130; nothing has been written yet),
+    where native code would have finished first -- a render releases the GIL and does not look
+    at signals, a loop in a C extension never ends.
+
+    NOTE: a thread in native code cannot be stopped from Python; os._exit ends the process
+    with it (the interpreter's clean-up would wait for the thread, or crash under it)."""
+    box: Dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = fn()
+        except BaseException as e:  # noqa: BLE001 -- raised again in the main thread
+            box["error"] = e
+
+    t = threading.Thread(target=target, name="synthgen-native", daemon=True)
+    t.start()
+    try:
+        while t.is_alive():
+            t.join(0.25)
+    except KeyboardInterrupt:
+        print("synthgen: interrupted; nothing was written", file=sys.stderr, flush=True)
+        try:
+            sys.stdout.flush()
+        finally:
+            os._exit(EXIT_INTERRUPTED)
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
 def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str, Any], out_dir: str,
                       label: str, expose: bool = False) -> int:
     """Renders ``scene`` with ``settings`` and writes every file of ``synthgen render``;
@@ -141,7 +187,7 @@ def render_and_write(scene: Any, settings: Dict[str, Any], scene_meta: Dict[str,
     say(f"{label}: {n_obj} object{'s' if n_obj != 1 else ''}, {n_light} light{'s' if n_light != 1 else ''}, "
          f"{cam.width}x{cam.height}, {settings['spp']} spp, max depth {settings['max_depth']}, "
          f"seed {settings['seed']}")
-    result = scene.render(**settings)
+    result = interruptible(lambda: scene.render(**settings))
     stats = result.stats
     say(f"rendered in {stats['wall_time_s']:.2f} s: {fmt_rate(stats['samples_per_s'])}samples/s, "
          f"{fmt_rate(stats['rays_per_s'])}rays/s ({stats['threads']} threads)")

@@ -5,7 +5,7 @@ import argparse
 import os
 
 from . import Command, register
-from .common import add_extension_option, add_render_options, overrides, render_and_write
+from .common import add_extension_option, add_render_options, interruptible, overrides, render_and_write
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -19,7 +19,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..scene.scene_file import load_scene
 
-    scene, settings, meta = load_scene(args.scene, allow_extensions=args.allow_extensions)
+    # (building the scene evaluates textures: a C extension's code)
+    scene, settings, meta = interruptible(lambda: load_scene(args.scene, allow_extensions=args.allow_extensions))
     settings.update(overrides(args))
     out_dir = args.output or os.path.join("out", os.path.splitext(os.path.basename(args.scene))[0])
     return render_and_write(scene, settings, meta, out_dir, args.scene)

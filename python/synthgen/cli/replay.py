@@ -7,7 +7,7 @@ import argparse
 import os
 
 from . import Command, register
-from .common import add_extension_option, add_render_options, overrides, render_and_write, say
+from .common import add_extension_option, add_render_options, interruptible, overrides, render_and_write, say
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -21,7 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from ..scene.journal import replay
 
-    scene, settings = replay(args.journal, allow_extensions=args.allow_extensions)
+    scene, settings = interruptible(lambda: replay(args.journal, allow_extensions=args.allow_extensions))
     if settings.pop("labels_only", False):
         say(f"{args.journal}: its last render was of labels only; rendering every channel")
     settings.update(overrides(args))

@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 
 from . import Command, register
-from .common import (EXIT_DROPPED, EXIT_INTERRUPTED, add_extension_option, add_scenario_overrides, positive_int,
-                     scenario_overrides)
+from .common import (EXIT_DROPPED, EXIT_INTERRUPTED, add_extension_option, add_scenario_overrides,
+                     nonnegative_float, positive_int, scenario_overrides)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -19,6 +19,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--only", type=int, nargs="+", metavar="K", help="(re-)render just these frames")
     p.add_argument("--recycle", type=positive_int, default=200, metavar="N",
                    help="replace a worker process after N frames (default 200)")
+    # NOTE: the default is synthgen.run.executors.FRAME_TIMEOUT (not imported here: the command
+    # line is parsed before the heavy modules load).
+    p.add_argument("--frame-timeout", type=nonnegative_float, metavar="S",
+                   help="seconds a frame may take before its worker process is killed and the frame reported failed "
+                        "(default 1800; 0: no limit; local workers only)")
+    p.add_argument("--in-process", action="store_true",
+                   help="render the frames in this process, not in a worker process (one worker; for a debugger: gdb, "
+                        "pdb): a crash or a hang then takes the run down, no --frame-timeout, Ctrl-C waits for the "
+                        "frame")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--journal", action="store_true",
                    help="write each frame's scene journal into DIR/journals (a failed frame's always goes into "
@@ -29,11 +38,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from ..run import run as run_scenario
+    from ..run.executors import FRAME_TIMEOUT
 
     summary = run_scenario(args.scenario, args.output, count=args.count, workers=args.workers,
                            scheduler=args.scheduler, resume=args.resume, only=args.only, recycle=args.recycle,
                            progress=not args.no_progress, overrides=scenario_overrides(args),
-                           allow_extensions=args.allow_extensions, journal=args.journal)
+                           allow_extensions=args.allow_extensions, journal=args.journal,
+                           frame_timeout=FRAME_TIMEOUT if args.frame_timeout is None else args.frame_timeout,
+                           isolate=not args.in_process)
     print(summary.text(debug=getattr(args, "debug", False)))
     if summary["interrupted"]:
         return EXIT_INTERRUPTED

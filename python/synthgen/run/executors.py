@@ -10,7 +10,13 @@ worker -- and per frame only the frame's number (:attr:`task_bytes` measures it)
 A worker process that dies (a crash in native code, e.g. a user's C extension, or the kernel's
 out-of-memory killer) takes only its frame: the frames in flight are rendered again one at a
 time in a fresh process, and the one that kills its process again is reported failed
-(``worker process died``) while the run goes on; finished frames are on disk already.
+(``worker process died``) while the run goes on; finished frames are on disk already. A frame
+that takes longer than ``frame_timeout`` seconds (a loop in a C extension) has its worker
+killed and is rendered again alone with the same limit; timed out again, it is reported failed
+(``timed out after N s``). With one worker, frames render in a worker process too (unless
+``isolate=False``: in this process, as a debugger or a test's monkeypatch needs), so that a
+crash or a hang never takes the run down and Ctrl-C (the parent terminates its workers) stops
+the run at once.
 """
 from __future__ import annotations
 
@@ -22,7 +28,7 @@ import time
 from collections import deque
 from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Sequence
 
-__all__ = ["LocalExecutor", "DaskExecutor"]
+__all__ = ["LocalExecutor", "DaskExecutor", "FRAME_TIMEOUT"]
 
 #: The shared part of the run, set once per worker process.
 _SHARED: Dict[str, Any] = {}
@@ -45,6 +51,18 @@ def _alone_worker(conn: Any, shared: tuple, fn: Callable, frame: int, options: D
     _init_worker(shared)
     conn.send(_run(fn, frame, options))
     conn.close()
+
+
+#: Seconds a frame may take by default before its worker is killed (``frame_timeout``).
+FRAME_TIMEOUT = 1800.0
+
+
+def _timed_out(frame: int, seconds: float) -> Dict[str, Any]:
+    return {"frame": frame, "ok": False, "pid": None,
+            "error": f"TimedOut: frame {frame} timed out after {seconds:g} s, again when it was rendered alone (its "
+                     "worker process was killed): a loop in native code (a C extension?) or a frame too slow for "
+                     "the limit (--frame-timeout); the other frames are unaffected",
+            "traceback": ""}
 
 
 def _died(frame: int, exitcode: Optional[int], journal: str = "") -> Dict[str, Any]:
@@ -70,13 +88,18 @@ def _share_cores(workers: int) -> int:
 
 
 class LocalExecutor:
-    """Frames on a pool of worker processes on this machine (``workers`` = 1: in this
-    process). Workers keep their scene across frames and are replaced after ``recycle``
-    frames, so memory cannot grow without bound."""
+    """Frames on a pool of worker processes on this machine (one worker: a worker process too,
+    unless ``isolate`` is False: in this process). Workers keep their scene across frames and
+    are replaced after ``recycle`` frames, so memory cannot grow without bound. A frame longer
+    than ``frame_timeout`` seconds (None or 0: no limit) has its worker killed; in this process
+    (``isolate`` False) no limit applies."""
 
-    def __init__(self, workers: int = 1, recycle: int = 200):
+    def __init__(self, workers: int = 1, recycle: int = 200, isolate: bool = True,
+                 frame_timeout: Optional[float] = FRAME_TIMEOUT):
         self.workers = max(1, int(workers))
         self.recycle = max(1, int(recycle))
+        self.isolate = bool(isolate) or self.workers > 1
+        self.frame_timeout = float(frame_timeout) if frame_timeout else 0.0
         self._pool: Any = None
         self._proc: Any = None  # a frame's own process (_alone)
         #: Bytes pickled per frame (the task: function reference, frame, options) and once per
@@ -109,26 +132,31 @@ class LocalExecutor:
         options = dict(options or {})
         self.shared_bytes = len(pickle.dumps(shared))
         self.task_bytes = len(pickle.dumps((_run, fn, frames[0] if frames else 0, options)))
-        if self.workers == 1:
+        if not self.isolate:
             for k in frames:
                 yield fn(shared[0], shared[1], k, *shared[2:], **options)
             return
         from concurrent.futures import FIRST_COMPLETED, wait
         from concurrent.futures.process import BrokenProcessPool
 
+        limit = self.frame_timeout
         pending: Deque[int] = deque(frames)
         while pending:
             pool = self._new_pool(self.workers, shared)
             inflight: Dict[Any, int] = {}
+            started: Dict[Any, float] = {}
             suspects: List[int] = []
+            overdue: List[int] = []
             try:
-                while (pending or inflight) and not suspects:
+                while (pending or inflight) and not suspects and not overdue:
                     # At most one frame per worker in flight: when a worker dies, only these
-                    # frames can have killed it.
+                    # frames can have killed it, and a frame's time starts when it is submitted.
                     while pending and len(inflight) < self.workers:
                         k = pending.popleft()
-                        inflight[pool.submit(_run, fn, k, options)] = k
-                    done, _ = wait(inflight, return_when=FIRST_COMPLETED)
+                        f = pool.submit(_run, fn, k, options)
+                        inflight[f], started[f] = k, time.monotonic()
+                    wait_s = max(0.0, min(started[f] for f in inflight) + limit - time.monotonic()) if limit else None
+                    done, _ = wait(inflight, timeout=wait_s, return_when=FIRST_COMPLETED)
                     for f in done:
                         k = inflight.pop(f)
                         try:
@@ -137,15 +165,24 @@ class LocalExecutor:
                             suspects.append(k)
                             continue
                         yield r
-                suspects.extend(inflight.values())
+                    if limit:
+                        now = time.monotonic()
+                        overdue.extend(k for f, k in inflight.items() if now - started[f] >= limit)
+                suspects.extend(k for k in inflight.values() if k not in overdue)
             except BaseException:
                 self.shutdown()
                 raise
-            pool.shutdown(wait=True, cancel_futures=True)
+            if overdue:  # a worker that does not finish its frame is killed with its pool
+                self.shutdown()
+            else:
+                pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
-            for k in sorted(set(suspects)):
+            # Frames in flight when a worker died or was killed, rendered alone: the one that
+            # kills its process (or times out) again is the culprit. Its journal was written
+            # before the render (alone_options).
+            for k in sorted(set(suspects) | set(overdue)):
                 r = self._alone(fn, shared, k, {**options, **(alone_options or {})})
-                if not r["ok"] and r["error"].startswith("WorkerDied") and alone_journal is not None:
+                if not r["ok"] and r["error"].startswith(("WorkerDied", "TimedOut")) and alone_journal is not None:
                     path = alone_journal(k)
                     if os.path.isfile(path):
                         r["journal"] = path
@@ -160,9 +197,15 @@ class LocalExecutor:
         receive, send = ctx.Pipe(duplex=False)
         proc = ctx.Process(target=_alone_worker, args=(send, shared, fn, frame, options))
         self._proc = proc
+        limit = self.frame_timeout
         try:
             proc.start()
             send.close()  # the child's end: a dead child leaves the pipe at end of file
+            deadline = time.monotonic() + limit
+            if not receive.poll(max(0.0, deadline - time.monotonic()) if limit else None):
+                proc.kill()  # nothing came (not even the end of file of a death) by the deadline
+                proc.join()
+                return _timed_out(frame, limit)
             try:
                 result = receive.recv()
             except EOFError:
@@ -172,23 +215,28 @@ class LocalExecutor:
             return result
         except BaseException:
             if proc.is_alive():
-                proc.terminate()
+                proc.kill()
             raise
         finally:
             receive.close()
             self._proc = None
 
     def shutdown(self) -> None:
+        """Stops every worker now (SIGKILL: a worker busy in native code, or in a loop of a C
+        extension, may not heed SIGTERM soon) and waits for them to be gone."""
         proc, self._proc = self._proc, None
         if proc is not None and proc.is_alive():
-            proc.terminate()
+            proc.kill()
+            proc.join()
         pool, self._pool = self._pool, None
         if pool is not None:
             procs = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
             for p in procs:
                 if p.is_alive():
-                    p.terminate()
+                    p.kill()
+            pool.shutdown(wait=False, cancel_futures=True)
+            for p in procs:
+                p.join()
 
 
 def _run_dask(fn: Callable, shared: tuple, frame: int, options: Dict[str, Any]) -> Dict[str, Any]:

@@ -14,7 +14,7 @@ import glob
 import os
 import sys
 import time
-from typing import Any, Dict, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from .. import outputs
 from .._core import SynthgenError
@@ -25,7 +25,7 @@ from ..outputs.registry import frame_name
 from .manifest import build_manifest, check_manifest, write_manifest
 from ..scenario import check_inputs, load_scenario
 from ..scenario.load import check_memory
-from .executors import DaskExecutor, LocalExecutor
+from .executors import FRAME_TIMEOUT, DaskExecutor, LocalExecutor
 from .task import journal_path, render_task
 
 __all__ = ["run", "RunSummary", "remove_temporaries", "ABORT_AFTER"]
@@ -82,7 +82,9 @@ class RunSummary(dict):
         if self.get("aborted"):
             lines.append(self["aborted"])
         if self.get("interrupted"):
-            lines.append("interrupted: completed frames are kept; run again with --resume")
+            left = self.get("requested", 0) - self.get("complete_requested", 0)
+            lines.append(f"interrupted: {self['rendered']} frame(s) finished in this run, {self['complete']} complete "
+                         f"in the directory and kept; the same command with --resume renders the {left} missing")
         return "\n".join(lines)
 
 
@@ -90,15 +92,24 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         scheduler: Any = None, resume: bool = False, only: Optional[Sequence[int]] = None,
         recycle: int = 200, progress: bool = True, threads: Optional[int] = None,
         overrides: Sequence[Tuple[str, Any]] = (), allow_extensions: bool = False,
-        journal: bool = False) -> RunSummary:
+        journal: bool = False, frame_timeout: Optional[float] = FRAME_TIMEOUT, isolate: bool = True) -> RunSummary:
     """Renders a scenario into ``out_dir`` (layout: :mod:`synthgen.outputs`); ``overrides``:
     (key path, value) pairs set in the scenario before validation (``--set``);
     ``allow_extensions``: consent to compile and run the scenario's C extensions; ``journal``:
     write every frame's change journal into ``journals/`` (a failed frame's always goes into
-    ``failed/``: ``synthgen replay`` renders it again)."""
+    ``failed/``: ``synthgen replay`` renders it again); ``frame_timeout``: seconds a frame may
+    take before its worker is killed and the frame reported failed (None or 0: no limit; local
+    workers only); ``isolate``: False renders the frames of one worker in this process (no
+    protection from crashes and hangs, no time limit: for debuggers and tests). Worker processes
+    are spawned: a script calling this needs multiprocessing's ``if __name__ == "__main__":``
+    guard."""
+    if not isolate and (workers > 1 or scheduler is not None):
+        raise SynthgenError("--in-process (isolate=False) renders in this process: not with --workers above 1 or "
+                            "--scheduler")
     sc = load_scenario(scenario_path, overrides, allow_extensions)  # validate before anything renders ...
-    check_inputs(sc)                   # ... and load every input file once
-    for w in sc.warnings:              # valid, but likely not meant (a sky nothing exposes)
+    found: List[str] = []              # suspicious, not wrong (a photo's geometry)
+    check_inputs(sc, found)            # ... and load every input file once (extensions' code: isolated)
+    for w in list(sc.warnings) + found:  # valid, but likely not meant (a sky nothing exposes)
         print(f"warning: {w}", file=sys.stderr, flush=True)
     n = int(count) if count is not None else sc.count
     if scheduler is None:  # local workers share this machine's memory
@@ -119,7 +130,8 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
     for k in broken:  # incomplete: rendered again below (they are not in `done`)
         os.unlink(os.path.join(out_dir, "meta", frame_name(k) + ".json"))
     todo = [k for k in frames if not (resume and k in done)] if only is None else frames
-    executor = DaskExecutor(scheduler) if scheduler is not None else LocalExecutor(workers, recycle)
+    executor = (DaskExecutor(scheduler) if scheduler is not None
+                else LocalExecutor(workers, recycle, isolate=isolate, frame_timeout=frame_timeout))
     if threads is None:  # cores / workers on this machine; a cluster's worker alone on its node: all of them
         threads = executor.default_threads()
     if sc.spec["render"]["threads"]:
@@ -160,6 +172,9 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         if scheduler is not None and not interrupted:
             executor.shutdown()
     wall = time.perf_counter() - t0
+    if scheduler is None:
+        # Local workers are gone: a worker killed (Ctrl-C, a time limit) may have been writing.
+        remove_temporaries(out_dir)
     complete = completed_frames(out_dir)
     finished = [k for k in complete if k < n or only is not None]
     sp = sc.spec["split"]
@@ -184,6 +199,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         stage_cpu_s={"total_s": cpu / m, "render_s": render_cpu / m, "other_s": (cpu - render_cpu) / m},
         non_render_fraction=(cpu - render_cpu) / cpu if cpu > 0 else 0.0,
         interrupted=interrupted, temporaries_removed=removed, complete=len(complete),
+        requested=len(frames), complete_requested=len(set(frames) & set(complete)),
         incomplete=[{"frame": k, "reason": r} for k, r in broken.items()], aborted=aborted,
         dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),
                        key=lambda d: d["frame"]),

@@ -10,10 +10,18 @@ Every model an object entry can draw (each option of a ``choice`` of assets) is 
 every randomizer applied to the entry, by the run's own test (``Randomizer.needs``): paint needs
 a paint material, plates plate mounts, lamps lamps; a library entry's material roles must name
 materials of its model.
+
+A scenario with C extensions is checked in a child process (:func:`check_inputs`): creating a
+texture evaluates the extension's code (its average over 512 points), and a crash there (a
+segfault) would kill ``synthgen validate`` and every ``run``, a loop would hang them. A crash, or
+an extension's first evaluation longer than ``timeout`` seconds, becomes a SceneFileError at the
+entry that uses it, naming the extension's texture and file.
 """
 from __future__ import annotations
 
 import os
+import signal
+import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import numpy as np
@@ -25,7 +33,10 @@ from ..schema.fields import InputPath, Validated
 from ..schema.plugins import given_params, realize
 from .load import Scenario
 
-__all__ = ["check_inputs"]
+__all__ = ["check_inputs", "EVALUATION_TIMEOUT"]
+
+#: Seconds an extension's first evaluation (a texture's creation) may take in the checks.
+EVALUATION_TIMEOUT = 60.0
 
 
 def _options(v: Any) -> List[Any]:
@@ -70,6 +81,34 @@ class _Checker:
         self.seen: Dict[Tuple[str, str], Any] = {}   # (kind, path) -> what loading it returned
         self.fonts = False
         self.asset_paths: Dict[str, str] = {}   # asset id -> its cached file
+        #: Called as note(loc, what) before extension code runs, note(None, "") after (the
+        #: isolated check reports it to the parent, which then knows whom to blame).
+        self.note: Optional[Callable[[Optional[Loc], str], None]] = None
+        self.extension_textures: Dict[str, str] = {}
+        if sc.spec["extensions"]:
+            from .._core import loaded_extension_libraries
+
+            for lib in loaded_extension_libraries():  # a name loaded twice: the latest wins
+                self.extension_textures.update({t: lib["source"] for t in lib["textures"]})
+
+    def extensions_in(self, tree: Any) -> List[str]:
+        """The extension textures ``tree`` creates: "texture 'NAME' of the extension FILE"."""
+        found: List[str] = []
+
+        def walk(v: Any) -> None:
+            if isinstance(v, dict):
+                t = v.get("type")
+                if isinstance(t, str) and t in self.extension_textures:
+                    found.append(f"texture '{t}' of the extension {self.extension_textures[t]}")
+                for x in v.values():
+                    walk(x)
+            elif isinstance(v, (list, tuple)):
+                for x in v:
+                    walk(x)
+
+        if self.extension_textures:
+            walk(tree)
+        return sorted(set(found))
 
     def fail(self, loc: Loc, what: str, e: Exception) -> None:
         raise SceneFileError(self.ctx.source, loc.line, loc.column, loc.path, f"{what}: {e}") from None
@@ -134,24 +173,33 @@ class _Checker:
         for option in _options(rec):
             if not isinstance(option, Validated) or not _constant(option):
                 continue
-            try:  # inline textures are created here: their errors are this plugin's
-                params = realize(self.scene, given_params(option))
-            except SynthgenError as e:
-                self.fail(option.loc, f"this {kind} cannot be created", e)
-            if kind == "light":
-                if option.get("type") == "envmap":
-                    if option.get("file") is not None:
-                        self.envmap(str(option["file"]), option.locs.get("file", loc))
-                    if option.get("asset") is not None:
-                        self.asset(option["asset"], "hdr", option.locs.get("asset", loc))
-                    continue
-            try:
-                if kind == "material":
-                    self.scene.add_material(str(option["type"]), params)
-                else:
-                    self.scene.add_light(str(option["type"]), params)
-            except SynthgenError as e:
-                self.fail(option.loc, f"this {kind} cannot be created", e)
+            ext = self.extensions_in(option)
+            if ext and self.note is not None:
+                self.note(option.loc, " and ".join(ext))
+            self.create(kind, option, loc)
+            if ext and self.note is not None:
+                self.note(None, "")
+
+    def create(self, kind: str, option: Validated, loc: Loc) -> None:
+        """Creates a material or light (``option``: constant parameters) and its inline textures."""
+        try:  # inline textures are created here: their errors are this plugin's
+            params = realize(self.scene, given_params(option))
+        except SynthgenError as e:
+            self.fail(option.loc, f"this {kind} cannot be created", e)
+        if kind == "light":
+            if option.get("type") == "envmap":
+                if option.get("file") is not None:
+                    self.envmap(str(option["file"]), option.locs.get("file", loc))
+                if option.get("asset") is not None:
+                    self.asset(option["asset"], "hdr", option.locs.get("asset", loc))
+                return
+        try:
+            if kind == "material":
+                self.scene.add_material(str(option["type"]), params)
+            else:
+                self.scene.add_light(str(option["type"]), params)
+        except SynthgenError as e:
+            self.fail(option.loc, f"this {kind} cannot be created", e)
 
     def lights(self, lights: Any, loc: Loc) -> None:
         for setup in _options(lights):
@@ -276,11 +324,107 @@ class _Checker:
                           SynthgenError(f"{path} not found (Debian package fonts-dejavu-core)"))
 
 
-def check_inputs(sc: Scenario, warnings: Optional[List[str]] = None) -> Dict[str, int]:
+def check_inputs(sc: Scenario, warnings: Optional[List[str]] = None,
+                 timeout: Optional[float] = EVALUATION_TIMEOUT) -> Dict[str, int]:
     """Loads every input of ``sc`` once; SceneFileError at the YAML entry of the first
     that cannot be used. Returns counts of what was checked; ``warnings`` (a list) receives
-    what is suspicious but would not fail (a photo's geometry)."""
+    what is suspicious but would not fail (a photo's geometry). A scenario with extensions is
+    checked in a child process; ``timeout``: seconds each first evaluation of an extension may
+    take there (None or 0: no limit)."""
+    if sc.spec["extensions"]:
+        return _check_isolated(sc, float(timeout or 0.0), warnings)
+    return _check(sc, warnings=warnings)
+
+
+def _check_child(conn: Any, sc: Scenario) -> None:
+    """The isolated check (a spawned process): sends ("note", line, column, key path, what)
+    before extension code runs and ("note", None, ...) after, then ("ok", counts) or ("error",
+    ...)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C: the parent kills this process
+    from ..scene.extensions import load_extension
+
+    try:
+        for path in sc.spec["extensions"]:  # consented to when the scenario was loaded
+            load_extension(path)
+
+        def note(loc: Optional[Loc], what: str) -> None:
+            conn.send(("note", None, None, "", "") if loc is None else ("note", loc.line, loc.column, loc.path, what))
+
+        found: List[str] = []
+        counts = _check(sc, note, found)
+        conn.send(("ok", counts, found))
+    except SceneFileError as e:
+        conn.send(("error", e.source, e.line, e.column, e.key_path, e.reason))
+    except Exception as e:  # noqa: BLE001 -- reported by the parent
+        conn.send(("error", None, None, None, "", f"{type(e).__name__}: {e}"))
+    conn.close()
+
+
+def _check_isolated(sc: Scenario, timeout: float, warnings: Optional[List[str]] = None) -> Dict[str, int]:
+    """:func:`_check` in a child process; its death, or an extension's evaluation longer than
+    ``timeout`` seconds, becomes a SceneFileError at the entry whose extension code ran."""
+    import multiprocessing as mp
+
+    from ..scene.extensions import exit_description
+
+    ctx = mp.get_context("spawn")  # NOTE: no fork of a process with render threads
+    receive, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_check_child, args=(send, sc))
+    note: Tuple[Any, ...] = (None, None, "", "")
+    since = 0.0
+    try:
+        proc.start()
+        send.close()
+        while True:
+            wait = max(0.0, since + timeout - time.monotonic()) if timeout and note[3] else None
+            if not receive.poll(wait):
+                proc.kill()
+                proc.join()
+                raise SceneFileError(sc.source, note[0], note[1], note[2],
+                                     f"the {note[3]} did not finish its first evaluation (creating the texture: its "
+                                     f"average over 512 points) within {timeout:g} s (a loop?); its process was "
+                                     "killed")
+            try:
+                msg = receive.recv()
+            except EOFError:
+                proc.join()
+                how = exit_description(proc.exitcode)
+                if proc.exitcode is not None and proc.exitcode > 0:  # Python's own exit, its traceback on stderr
+                    raise SynthgenError(f"{sc.source}: the process checking the scenario (it has extensions) ended"
+                                        f"{how} before it reported, with the error printed above (a script needs "
+                                        "multiprocessing's `if __name__ == \"__main__\":` guard: the process is "
+                                        "spawned)") from None
+                if not note[3]:
+                    raise SynthgenError(f"{sc.source}: the check of the scenario's inputs crashed its process{how} "
+                                        "outside any extension's code") from None
+                raise SceneFileError(sc.source, note[0], note[1], note[2],
+                                     f"the {note[3]} crashed its process{how} in its first evaluation (creating "
+                                     "the texture: its average over 512 points); every frame would fail "
+                                     "alike") from None
+            if msg[0] == "note":
+                note, since = msg[1:], time.monotonic()
+                continue
+            proc.join()
+            if msg[0] == "ok":
+                if warnings is not None:
+                    warnings.extend(msg[2])
+                return msg[1]
+            if msg[1] is None:
+                raise SynthgenError(f"{sc.source}: {msg[5]}")
+            raise SceneFileError(*msg[1:])
+    except BaseException:
+        if proc.is_alive():
+            proc.kill()
+            proc.join()
+        raise
+    finally:
+        receive.close()
+
+
+def _check(sc: Scenario, note: Optional[Callable[[Optional[Loc], str], None]] = None,
+           warnings: Optional[List[str]] = None) -> Dict[str, int]:
     c = _Checker(sc)
+    c.note = note
     spec = sc.spec
     c.lights(spec["lights"], spec.locs.get("lights", spec.loc))
     ground = spec["ground"]

@@ -5,8 +5,9 @@ An extension is one C file written against ``synthgen_ext.h`` (:func:`header_dir
 version ``synthgen._core.EXTENSION_ABI_VERSION``). :func:`load_extension` compiles it with the
 system C compiler (``cc``, or ``$SYNTHGEN_CC``: ``-O2 -shared -fPIC``) into a cache keyed by
 the hash of the source, the header and the compiler (``$SYNTHGEN_CACHE/extensions``, default
-``~/.cache/synthgen/extensions``), loads it, and registers its textures and shapes as plugins
-by name: ``scene.add_texture("rust_mask", {...})``, ``scene.add_shape("torus", {...})``.
+``~/.cache/synthgen/extensions``), loads it (a new library first in a child process: a crash
+or a loop in its own loading code becomes an ExtensionError), and registers its textures and
+shapes as plugins by name: ``scene.add_texture("rust_mask", {...})``, ``scene.add_shape("torus", {...})``.
 Arguments are a parameter block built per texture or shape: changing them never recompiles.
 
 **Extensions run with your rights.** Compiling and running user code happens only when asked
@@ -19,7 +20,9 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import signal
 import subprocess
+import sys
 import tempfile
 from typing import Any, Dict, List, Optional
 
@@ -27,13 +30,15 @@ from .. import _core
 from .._core import Scene, SynthgenError
 
 __all__ = ["ExtensionError", "load_extension", "compile_extension", "header_dir", "compiler", "cache_dir",
-           "loaded_extensions", "example", "NOT_ALLOWED"]
+           "loaded_extensions", "example", "exit_description", "NOT_ALLOWED"]
 
 #: Flags of every compile (the cache key includes them).
 _FLAGS = ["-O2", "-shared", "-fPIC", "-std=c11", "-fvisibility=hidden", "-Wall",
           "-Werror=implicit-function-declaration", "-Werror=return-type"]
 #: Seconds a compile may take.
 _TIMEOUT = 120.0
+#: Seconds loading a new library in a child process may take (:func:`_probe`).
+_PROBE_TIMEOUT = 60.0
 
 NOT_ALLOWED = ("extensions run with your rights: compiling and running {what} needs 'allow_extensions: true' "
                "in the file and --allow-extensions on the command line")
@@ -136,12 +141,42 @@ def compile_extension(path: str) -> Dict[str, Any]:
     return info
 
 
+def _probe(info: Dict[str, Any]) -> None:
+    """Loads a library in a child process first, once per compiled library (a marker beside it
+    then says it loaded): loading runs the extension's own code (``synthgen_extension()``, a
+    library's constructors), and a crash or a loop there would take this process down. Raises
+    ExtensionError naming the file for a crash or a load longer than ``_PROBE_TIMEOUT``; an
+    error the loader reports (ABI version, declarations) is left to the load in this process."""
+    lib = info["library"]
+    marker = lib + ".loaded"
+    if os.path.isfile(marker):
+        return
+    package_parent = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in [package_parent, os.environ.get("PYTHONPATH")] if p))
+    code = "import sys; from synthgen import _core; _core.load_extension_library(sys.argv[1], sys.argv[2])"
+    try:
+        out = subprocess.run([sys.executable, "-c", code, lib, info["source"]], capture_output=True, text=True,
+                             timeout=_PROBE_TIMEOUT, env=env, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:  # (the child is killed)
+        raise ExtensionError(f"{info['source']}: loading the extension took more than {_PROBE_TIMEOUT:g} s (its "
+                             "synthgen_extension() or a constructor in a loop?); its process was killed") from None
+    if out.returncode < 0:
+        raise ExtensionError(f"{info['source']}: loading the extension crashed its process"
+                             f"{exit_description(out.returncode)} (its synthgen_extension() or a constructor of the "
+                             "library)")
+    if out.returncode == 0:
+        fd, tmp = tempfile.mkstemp(prefix=".loaded-", dir=os.path.dirname(lib))
+        os.close(fd)
+        os.replace(tmp, marker)
+
+
 def load_extension(path: str, scene: Optional[Scene] = None) -> Dict[str, Any]:
     """Compiles (or finds cached) and loads the extension ``path``; registers its textures
     and shapes as plugins. Returns ``{'library', 'source', 'sha256', 'cached', 'textures',
     'shapes'}``. Calling this is the consent to run the file's code (see the module doc).
     ``scene``: the scene the extension is loaded for (recorded in its journal)."""
     info = compile_extension(path)
+    _probe(info)
     try:
         loaded = _core.load_extension_library(info["library"], info["source"])
     except SynthgenError as e:
@@ -153,6 +188,17 @@ def load_extension(path: str, scene: Optional[Scene] = None) -> Dict[str, Any]:
     if scene is not None:
         scene.note_extension(info["source"], info["sha256"], _read_source(info["source"]))
     return info
+
+
+def exit_description(exitcode: Optional[int]) -> str:
+    """How a process that ran extension code ended, from its exit code (multiprocessing's:
+    negative for a signal): " (killed by SIGSEGV)", " (exit code 3)" or ""."""
+    if exitcode is not None and exitcode < 0:
+        try:
+            return f" (killed by {signal.Signals(-exitcode).name})"
+        except ValueError:
+            return f" (killed by signal {-exitcode})"
+    return f" (exit code {exitcode})" if exitcode is not None else ""
 
 
 def loaded_extensions() -> List[Dict[str, Any]]:
