@@ -6,7 +6,7 @@ PY := $(VENV)/bin/python
 BUILD := build
 JOBS ?= $(shell nproc)
 APT_PACKAGES := cmake gcc g++ make pkg-config libembree-dev libopenimageio-dev python3-openimageio \
-  libpugixml-dev libeigen3-dev pybind11-dev libassimp-dev libtbb-dev libgtest-dev libopenvdb-dev \
+  libpugixml-dev libeigen3-dev libssl-dev pybind11-dev libassimp-dev libtbb-dev libgtest-dev libopenvdb-dev \
   python3-dev python3-venv python3-pip python3-setuptools python3-wheel python3-numpy \
   python3-yaml python3-pytest python3-tqdm python3-distributed python3-matplotlib assimp-testmodels blender-data \
   fonts-dejavu-core tesseract-ocr
