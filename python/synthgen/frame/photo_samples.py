@@ -3,13 +3,14 @@
 Camera matching (:mod:`synthgen.post.photo.camera_match`) adds to each inserted object only the
 noise it lacks: an object whose Monte Carlo noise already exceeds the photo's cannot be matched
 (its noise loop drives the gain to 0 and stays above target). So, after the frame's render,
-:func:`refine_objects` renders each object again -- a crop of the image around it (its box, its
-edges and the shadow under it) with the same camera, scene and settings -- with adaptive
-sampling (``noise_threshold``, ``cpp/integrator/adaptive.h``) whose target is a fraction of the
-photo's noise at the object's level, from the frame's samples per pixel up to a cap, and puts
-the crop's buffers in place of the frame's. Labels stay the frame's (the crop's pixel-centre
-rays are the same rays). Everything is a function of the frame's render, its photo and seed:
-the crops, their thresholds and seeds, and the renderer's rounds are bit-identical for any
+:func:`refine_objects` renders the objects' pixels again -- the 16 x 16 tiles that hold them
+(and the 2 pixels around them: their edges, the blur's reach), in runs along the rows, with the
+same camera rays, scene and settings -- with adaptive sampling (``noise_threshold``,
+``cpp/integrator/adaptive.h``) whose target is a fraction of the photo's noise at the object's
+level, from the frame's samples per pixel up to a cap, and puts the pieces' buffers in place of
+the frame's. Labels stay the frame's (the pieces' pixel-centre rays are the same rays); shadows
+keep the frame's samples. Everything is a function of the frame's render, its photo and seed:
+the pieces, their thresholds and seeds, and the renderer's rounds are bit-identical for any
 thread count.
 
 Per object, ``info["objects"]`` records the photo's noise at its level, the target, the noise
@@ -31,10 +32,12 @@ __all__ = ["refine_objects", "PatchedResult", "srgb_slope", "DEFAULT_FRACTION", 
 
 #: The objects' render noise target: this fraction of the photo's noise sigma at their level.
 DEFAULT_FRACTION = 0.5
-#: The default sample cap: this many times the render's spp.
-DEFAULT_CAP_FACTOR = 16
+#: The default sample cap: this many times the render's spp. NOTE: measured (docs/augmented_photos.md),
+#: clean photos need about 100 x spp to bring the objects' raw noise below half theirs, so the cap
+#: is what a frame costs: 4 x took augmented_road.yaml from 13.6 to 28.8 CPU s a frame, 16 x to 65.0.
+DEFAULT_CAP_FACTOR = 4
 
-#: The buffers a crop render replaces (the composite's, the rgb and its error estimate's).
+#: The buffers a piece's render replaces (the composite's, the rgb and its error estimate's).
 PATCHED = ("rgb", "rgb_even", "rgb_odd", "variance", "sample_count", "synthetic_rgb", "synthetic_alpha",
            "catcher_with", "catcher_without", "behind_synthetic")
 
@@ -65,39 +68,48 @@ class PatchedResult:
         return getattr(self.__dict__["_base"], name)
 
 
-def _crops(ids: np.ndarray, objects: List[int]) -> List[Tuple[List[int], Tuple[int, int, int, int]]]:
-    """(objects, (x0, y0, x1, y1)) of the crops that render them: each object's box grown by a
-    quarter of its size sideways and up and by half its height down (its edges, the blur's reach
-    and the shadow under it), overlapping boxes merged; in the order of their objects' ids."""
+#: The pieces rendered again are runs of TILE x TILE tiles along the image's rows.
+TILE = 16
+
+
+def _pieces(ids: np.ndarray, objects: List[int], threshold: Mapping[int, float]
+            ) -> List[Tuple[float, Tuple[int, int, int, int]]]:
+    """(threshold, (x0, y0, x1, y1)) of the pieces to render again: the TILE x TILE tiles (aligned
+    to the image) that hold a pixel of an object or one within 2 pixels of it (its edges and the
+    blur's reach), each with the smallest threshold of the objects it holds; consecutive tiles of
+    a row of tiles with the same threshold make one piece. In the order of the rows, then of x."""
+    from ..post.photo.measure import dilate
+
     h, w = ids.shape
-    boxes = []
+    ty, tx = -(-h // TILE), -(-w // TILE)
+    tile_t = np.full((ty, tx), np.inf)
     for o in objects:
-        ys, xs = np.nonzero(ids == o)
-        bw, bh = xs.max() + 1 - xs.min(), ys.max() + 1 - ys.min()
-        mx, my = max(4, int(math.ceil(0.25 * bw))), max(4, int(math.ceil(0.25 * bh)))
-        boxes.append(([o], (max(0, xs.min() - mx), max(0, ys.min() - my), min(w, xs.max() + 1 + mx),
-                           min(h, ys.max() + 1 + max(4, int(math.ceil(0.5 * bh)))))))
-    merged = True
-    while merged:
-        merged = False
-        for i in range(len(boxes)):
-            for j in range(i + 1, len(boxes)):
-                (oa, a), (ob, b) = boxes[i], boxes[j]
-                if a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]:
-                    boxes[i] = (oa + ob, (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3])))
-                    del boxes[j]
-                    merged = True
-                    break
-            if merged:
-                break
-    return boxes
+        m = dilate(ids == o, 2)
+        pad = np.zeros((ty * TILE, tx * TILE), bool)
+        pad[:h, :w] = m
+        touched = pad.reshape(ty, TILE, tx, TILE).any(axis=(1, 3))
+        tile_t = np.where(touched, np.minimum(tile_t, threshold[o]), tile_t)
+    pieces = []
+    for r in range(ty):
+        c = 0
+        while c < tx:
+            t = tile_t[r, c]
+            if not np.isfinite(t):
+                c += 1
+                continue
+            e = c + 1
+            while e < tx and tile_t[r, e] == t:
+                e += 1
+            pieces.append((float(t), (c * TILE, r * TILE, min(w, e * TILE), min(h, (r + 1) * TILE))))
+            c = e
+    return pieces
 
 
 def refine_objects(scene: Any, res: Any, fp: Any, camera: Any, settings: Mapping[str, Any],
                    match: Optional[Mapping[str, Any]] = None, *, exposure: float, seed: int, threads: int
                    ) -> Tuple[Any, Dict[str, Any]]:
     """(render, info): ``res`` (the frame's RenderResult, rendered with ``settings`` -- the
-    scenario's render section -- and ``exposure``) with the objects' crops rendered again until
+    scenario's render section -- and ``exposure``) with the objects' pixels rendered again until
     their noise is below ``match["render_noise"]`` (the scenario's background.match; default
     :data:`DEFAULT_FRACTION`) of the photo's (see the module docstring), up to ``match["max_spp"]``
     samples per pixel (0: :data:`DEFAULT_CAP_FACTOR` x spp). A fraction of 0: ``res`` as it is,
@@ -154,34 +166,33 @@ def refine_objects(scene: Any, res: Any, fp: Any, camera: Any, settings: Mapping
         threshold = fraction * photo_sigma * per_srgb
         target[o] = {"level": level, "photo_sigma": photo_sigma, "per_srgb": per_srgb, "threshold": threshold}
     out = res
-    crops = []
+    pieces = {"renders": 0, "pixels": 0, "samples": 0}
     if cap > spp:
+        from .._core import PinholeCamera
+
         out = PatchedResult(res)
         base = {key: settings[key] for key in RENDER_KEYS if key != "threads" and key in settings}
+        # A noiseless photo (threshold 0, which would turn adaptive sampling off): to the cap.
+        thresholds = {o: max(target[o]["threshold"], 1e-9) for o in objects}
         try:
-            for n, (objs, (x0, y0, x1, y1)) in enumerate(_crops(ids, objects)):
-                # A noiseless photo (threshold 0, which would turn adaptive sampling off): to the cap.
-                t = max(min(target[o]["threshold"] for o in objs), 1e-9)
-                if not math.isfinite(t):
-                    continue
-                from .._core import PinholeCamera
-
+            for n, (t, (x0, y0, x1, y1)) in enumerate(_pieces(ids, objects, thresholds)):
                 cam = PinholeCamera(camera.fx, camera.fy, camera.cx - x0, camera.cy - y0, x1 - x0, y1 - y0,
                                     np.asarray(camera.world_from_camera, np.float64),
                                     distortion=tuple(camera.distortion))
                 scene.set_camera(cam)
                 kw = dict(base, spp=cap, min_spp=spp, max_spp=cap, noise_threshold=t, target_psnr=0.0,
                           denoise=False)
-                crop_seed = int(np.random.SeedSequence([int(seed), 7, n]).generate_state(1, np.uint64)[0])
-                r = scene.render(seed=crop_seed, threads=threads, exposure=exposure, **kw)
+                piece_seed = int(np.random.SeedSequence([int(seed), 7, n]).generate_state(1, np.uint64)[0])
+                r = scene.render(seed=piece_seed, threads=threads, exposure=exposure, **kw)
                 for name, buf in out.buffers.items():
                     buf[y0:y1, x0:x1] = np.asarray(getattr(r, name))
-                crops.append({"box": [int(x0), int(y0), int(x1), int(y1)], "objects": objs,
-                              "noise_threshold": t, "samples": int(r.stats["samples"])})
+                pieces["renders"] += 1
+                pieces["pixels"] += (x1 - x0) * (y1 - y0)
+                pieces["samples"] += int(r.stats["samples"])
         finally:
             scene.set_camera(camera)
         out.stats["samples"] = int(np.asarray(out.sample_count, np.int64).sum())
-    info["crops"] = crops
+    info["rendered_again"] = pieces
     count = np.asarray(out.sample_count)
     for o in objects:
         pix = whole & (ids == o)

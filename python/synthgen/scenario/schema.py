@@ -172,7 +172,7 @@ BACKGROUND = Record(
                                              doc="render the objects again (a crop around each, adaptive sampling) "
                                                  "until their noise is below this fraction of the photo's at their "
                                                  "level, before the photo's noise is added (0: off)"),
-                      "max_spp": Integer(0, min=0, doc="the objects' sample cap for render_noise (0: 16 x "
+                      "max_spp": Integer(0, min=0, doc="the objects' sample cap for render_noise (0: 4 x "
                                                        "render.spp); objects stopped by it short of the target "
                                                        "are reported")},
                      default=EMPTY, doc="camera matching: what the photo's camera did, applied to the objects"),
