@@ -6,7 +6,6 @@ sigma added in sRGB, so the target is known."""
 from __future__ import annotations
 
 import json
-import os
 
 import numpy as np
 import OpenImageIO as oiio

@@ -78,8 +78,6 @@ def _pieces(ids: np.ndarray, objects: List[int], threshold: Mapping[int, float]
     to the image) that hold a pixel of an object or one within 2 pixels of it (its edges and the
     blur's reach), each with the smallest threshold of the objects it holds; consecutive tiles of
     a row of tiles with the same threshold make one piece. In the order of the rows, then of x."""
-    from ..post.photo.measure import dilate
-
     h, w = ids.shape
     ty, tx = -(-h // TILE), -(-w // TILE)
     tile_t = np.full((ty, tx), np.inf)
