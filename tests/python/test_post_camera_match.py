@@ -170,3 +170,28 @@ def test_a_soft_render_is_sharpened_at_its_edges_not_in_its_flat_insides():
     assert after == pytest.approx(target, rel=0.2)
     inside = _inner(_inner(flat_mask(ids > 0, albedo, normal)))
     assert np.abs(out[inside] - soft[inside]).max() < 1e-5
+
+
+def test_what_cannot_be_matched_is_reported_per_object():
+    """An object whose render is noisier than the photo (its noise loop cannot take noise away)
+    and a photo softer than the largest blur gives (the sharpness clamp) are reported per object
+    in ``unmatched``, with the numbers (objects that converge are not:
+    test_photo_render_noise.test_a_frame_whose_matching_converges_reports_so)."""
+    photo, comp, ids, albedo, normal = _photo_with_two_objects()
+    rng = np.random.default_rng(9)
+    noisy = comp + (ids == 2)[..., None] * rng.normal(0, 0.01, comp.shape).astype(np.float32)
+    out, info = match_camera(photo, noisy, ids > 0, np.random.default_rng(3), jpeg_quality=90, blur=False,
+                             denoise=False, synthetic=(ids > 0).astype(np.float32), ids=ids, albedo=albedo,
+                             normal=normal)
+    print(f"\nloop {info['noise_loop_worst_error']}, unmatched {info.get('unmatched')}")
+    (check,) = info["unmatched"][2]  # (the clean object 1, left over 6 rounds, ends at 5 %: reported too)
+    assert check["check"] == "noise_loop" and check["error"] >= 0.03
+    assert check["noise"] > 1.03 * check["photo_noise"] and check["gain"] < 0.05
+
+    soft = linear(np.repeat(gaussian_blur(srgb(photo)[..., 0], 6.0)[..., None], 3, axis=2))
+    out, info = match_camera(soft, comp, ids > 0, np.random.default_rng(3), noise=False, denoise=False,
+                             synthetic=(ids > 0).astype(np.float32), ids=ids, albedo=albedo, normal=normal)
+    print(f"blur {info['blur_per_object']}, unmatched {info.get('unmatched')}")
+    (check,) = info["unmatched"][2]
+    assert check["check"] == "blur_clamp" and check["amount"] == info["blur_per_object"][2] == 3.0
+    assert check["sharpness"] > 1.02 * check["target"] and check["target"] == info["photo_sharpness"]

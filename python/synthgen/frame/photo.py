@@ -260,6 +260,20 @@ def exposure_factor(photo: np.ndarray, without: np.ndarray, synthetic_alpha: np.
     return (k * np.clip(chroma, 0.7, 1.4)).astype(np.float32), where
 
 
+def frame_exposure(fp: FramePhoto, res: Any, ids: np.ndarray, depth: np.ndarray,
+                   boxes: Sequence[Sequence[float]]) -> Tuple[np.ndarray, str]:
+    """:func:`exposure_factor` of a photo frame's render: its ground (instance 0, finite depth)
+    without the objects, in rings around ``boxes``, real objects' boxes excluded."""
+    ground = (ids == 0) & np.isfinite(depth)
+    exclude = np.zeros(ids.shape, bool)
+    h, w = ids.shape
+    for o in fp.objects:
+        x0, y0, x1, y1 = (int(round(v)) for v in o.box)
+        exclude[max(y0, 0):min(y1, h), max(x0, 0):min(x1, w)] = True
+    return exposure_factor(fp.pixels, np.asarray(res.catcher_without) + np.asarray(res.behind_synthetic),
+                           np.asarray(res.synthetic_alpha), ground, boxes, exclude)
+
+
 def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
     """H x W camera-space depth of the photo's outlined real objects (and ignore regions) as
     the calibration places them: each stands on the ground at its box's bottom edge, upright, so
@@ -291,21 +305,17 @@ def real_object_depth(fp: FramePhoto, camera: Any) -> np.ndarray:
 def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], mode: str,
                        boxes: Sequence[Sequence[float]], real_depth: Optional[np.ndarray],
                        occluder_mask: Optional[np.ndarray], camera: Any = None,
-                       match: Optional[Mapping[str, Any]] = None, rng: Optional[np.random.Generator] = None
-                       ) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
+                       match: Optional[Mapping[str, Any]] = None, rng: Optional[np.random.Generator] = None,
+                       sampling: Optional[Dict[str, Any]] = None) -> Tuple[Dict[str, np.ndarray], Dict[str, Any]]:
     """The composite and the labels of a photo frame (arrays from the render, ``boxes`` the
     inserted objects' boxes as x0, y0, x1, y1), then camera matching (``match``: the scenario's
-    background.match); returns (arrays, meta)."""
+    background.match); returns (arrays, meta). ``sampling``: what
+    :func:`synthgen.frame.photo_samples.refine_objects` did, recorded as ``camera_match.sampling``;
+    its objects short of their noise target join ``camera_match.unmatched`` (check
+    "render_noise")."""
     ids = np.asarray(arrays["instance_id"])
     depth = np.asarray(arrays["depth"], np.float32)
-    ground = (ids == 0) & np.isfinite(depth)
-    exclude = np.zeros(ids.shape, bool)
-    h, w = ids.shape
-    for o in fp.objects:
-        x0, y0, x1, y1 = (int(round(v)) for v in o.box)
-        exclude[max(y0, 0):min(y1, h), max(x0, 0):min(x1, w)] = True
-    k, where = exposure_factor(fp.pixels, np.asarray(res.catcher_without) + np.asarray(res.behind_synthetic),
-                               np.asarray(res.synthetic_alpha), ground, boxes, exclude)
+    k, where = frame_exposure(fp, res, ids, depth, boxes)
     rgb = composite(fp.pixels, res, mode, exposure=k)
     # Real things in front of the inserted objects: the photo's nearer depth, or the occluder mask.
     synthetic = ids > 0
@@ -336,6 +346,16 @@ def finish_photo_frame(fp: FramePhoto, res: Any, arrays: Dict[str, np.ndarray], 
             albedo=arrays.get("albedo"), normal=arrays.get("normal"), denoise=match["denoise"])
         if front.any():  # what real things hide stays the photo's (blur may have spread into it)
             rgb = np.where(front[..., None], fp.pixels, rgb)
+    if sampling is not None:
+        camera_info["sampling"] = sampling
+        short = {o: [{"check": "render_noise", "noise": r["achieved"], "target": r["target"],
+                      "photo_noise": r["photo_noise"], "spp_mean": r["spp_mean"], "cap_spp": sampling["cap_spp"]}]
+                 for o, r in sampling["objects"].items() if not r["reached"]}
+        if short:
+            merged = dict(short)
+            for o, checks in camera_info.get("unmatched", {}).items():
+                merged[o] = merged.get(o, []) + checks
+            camera_info["unmatched"] = merged
     out = dict(arrays)
     out["rgb"] = rgb.astype(np.float32)
     out["instance_id"] = np.where(front, 0, ids).astype(ids.dtype)

@@ -280,6 +280,12 @@ class FrameRenderer:
         c_render = time.process_time()
         res = self.scene.render(seed=render_seed, threads=self.threads, exposure=exposure,
                                 **{k: rs[k] for k in RENDER_KEYS if k != "threads"})
+        sampling = None
+        if fp is not None:  # the inserted objects rendered until less noisy than the photo
+            from .photo_samples import refine_objects
+
+            res, sampling = refine_objects(self.scene, res, fp, camera, rs, sc.spec["background"]["match"],
+                                           exposure=exposure, seed=render_seed, threads=self.threads)
         t_render = time.perf_counter()
         c_render = time.process_time() - c_render  # the path tracer's CPU time (all its threads)
 
@@ -298,7 +304,7 @@ class FrameRenderer:
                      for b in [mask_bbox(ids == k + 1)] if b is not None]
             arrays, photo_meta = finish_photo_frame(fp, res, arrays, sc.spec["background"]["composite"], boxes,
                                                     fp.depth, fp.occluders, camera, sc.spec["background"]["match"],
-                                                    frame_rng(sc.seed, frame, 6))
+                                                    frame_rng(sc.seed, frame, 6), sampling=sampling)
             hidden = set(np.unique(ids[(ids > 0) & (arrays["instance_id"] == 0)]).tolist())
             for k in range(len(objects)):
                 if keep[k] and objects[k].spec.labelled and (k + 1) in hidden and not (arrays["instance_id"] == k + 1).any():

@@ -46,9 +46,23 @@ def remove_temporaries(out_dir: str) -> int:
     return n
 
 
+def _camera_match(results) -> Dict[str, Any]:
+    """Per camera-matching check, {frame: object ids} over the frames' results; ``cap_spp``."""
+    out: Dict[str, Any] = {}
+    for r in sorted(results, key=lambda r: r["frame"]):
+        for check, ids in (r.get("camera_match") or {}).items():
+            if check == "cap_spp":
+                if ids:
+                    out["cap_spp"] = ids
+                continue
+            out.setdefault(check, {})[r["frame"]] = ids
+    return out
+
+
 class RunSummary(dict):
     """frames, failures (frame, reason), mean seconds per frame and per stage (wall time:
-    ``stage_s``; CPU time of the workers: ``stage_cpu_s``, ``non_render_fraction``)."""
+    ``stage_s``; CPU time of the workers: ``stage_cpu_s``, ``non_render_fraction``); photo
+    frames: ``camera_match``, per check camera matching failed, {frame: object ids}."""
 
     def text(self, debug: bool = False) -> str:
         """The summary; with ``debug``, each failed frame's traceback too."""
@@ -77,6 +91,9 @@ class RunSummary(dict):
             for d in dropped[:10]:
                 lines.append(f"  frame {d['frame']}: " + "; ".join(f"object {o['index']} ({o['class']}): "
                                                               f"{o['reason']}" for o in d["objects"]))
+        cm = self.get("camera_match")
+        if cm:
+            lines.append(camera_match_line(cm))
         for f in self.get("incomplete", [])[:20]:
             lines.append(f"  frame {f['frame']} was incomplete and is rendered again: {f['reason']}")
         if self.get("aborted"):
@@ -86,6 +103,27 @@ class RunSummary(dict):
             lines.append(f"interrupted: {self['rendered']} frame(s) finished in this run, {self['complete']} complete "
                          f"in the directory and kept; the same command with --resume renders the {left} missing")
         return "\n".join(lines)
+
+
+#: The camera-matching checks a frame's meta reports (background.camera_match.unmatched), in the
+#: summary's words.
+CAMERA_MATCH_CHECKS = (("render_noise", "render noise above the target"),
+                       ("noise_loop", "noise loop not converged (3 %)"),
+                       ("blur_clamp", "sharpness clamp hit"))
+
+
+def camera_match_line(cm: Dict[str, Any]) -> str:
+    """One line: per check, the objects and frames camera matching could not match (``cm``: the
+    summary's ``camera_match``: per check, frame -> object ids; ``cap_spp``)."""
+    parts = []
+    for check, words in CAMERA_MATCH_CHECKS:
+        frames = cm.get(check) or {}
+        if frames:
+            n = sum(len(v) for v in frames.values())
+            extra = f" (sample cap {cm['cap_spp']} spp)" if check == "render_noise" and cm.get("cap_spp") else ""
+            parts.append(f"{words} for {n} object(s) in {len(frames)} frame(s){extra}: frames "
+                         + ", ".join(str(k) for k in sorted(frames)[:10]) + (" ..." if len(frames) > 10 else ""))
+    return ("camera matching not reached (meta background.camera_match.unmatched): " + "; ".join(parts))
 
 
 def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: int = 1,
@@ -204,6 +242,7 @@ def run(scenario_path: str, out_dir: str, count: Optional[int] = None, workers: 
         dropped=sorted(({"frame": r["frame"], "objects": r["dropped"]} for r in results if r.get("dropped")),
                        key=lambda d: d["frame"]),
         drops_allowed=bool(sc.spec["placement"]["allow_drops"]),
+        camera_match=_camera_match(results),
         task_bytes=executor.task_bytes, shared_bytes=executor.shared_bytes)
     write_json(os.path.join(out_dir, "run_summary.json"), dict(summary))
     return summary

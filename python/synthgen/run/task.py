@@ -115,8 +115,16 @@ def render_task(scenario: Scenario, out_dir: str, frame: int, threads: int = 0, 
         timings["cpu_s"] = time.process_time() - c0
         dropped = [{"index": o["index"], "class": o["class"], "reason": o["dropped"]}
                    for o in meta["objects"] if o.get("dropped")]
+        # Photo frames: the objects camera matching could not match (meta background.camera_match).
+        cm = (meta.get("background") or {}).get("camera_match") or {}
+        unmatched = {}
+        for o, checks in (cm.get("unmatched") or {}).items():
+            for c in checks:
+                unmatched.setdefault(c["check"], []).append(o)
+        if unmatched:
+            unmatched["cap_spp"] = (cm.get("sampling") or {}).get("cap_spp")
         return {"frame": frame, "ok": True, "timings": timings, "dropped": dropped, "pid": os.getpid(),
-                "rss_bytes": resident_bytes()}
+                "rss_bytes": resident_bytes(), "camera_match": unmatched}
     except Exception as e:  # reported per frame; the run goes on
         out = {"frame": frame, "ok": False, "error": f"{type(e).__name__}: {e}",
                "traceback": traceback.format_exc(), "pid": os.getpid()}

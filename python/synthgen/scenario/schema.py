@@ -203,7 +203,14 @@ BACKGROUND = Record(
                                                                       "thin lens's)"),
                       "chromatic_aberration": Number(0.0, min=-5.0, max=5.0,
                                                      doc="lateral colour fringes on the objects: red/blue displaced "
-                                                         "by this many pixels at the image corner")},
+                                                         "by this many pixels at the image corner"),
+                      "render_noise": Number(0.5, min=0.0, max=1.0,
+                                             doc="render the objects again (a crop around each, adaptive sampling) "
+                                                 "until their noise is below this fraction of the photo's at their "
+                                                 "level, before the photo's noise is added (0: off)"),
+                      "max_spp": Integer(0, min=0, doc="the objects' sample cap for render_noise (0: 4 x "
+                                                       "render.spp); objects stopped by it short of the target "
+                                                       "are reported")},
                      default=EMPTY, doc="camera matching: what the photo's camera did, applied to the objects"),
      "ground_albedo": Vector(3, None, min=0.0, max=1.0, broadcast=True,
                              doc="albedo of the ground that catches shadows (default: 0.15 with the photo's ground "

@@ -17,7 +17,9 @@ The measurements (noise fit, sharpness, flat regions, ring statistics) are in
 * :func:`flat_mask` -- where a render is flat (albedo and normal), so what varies is noise;
 * :func:`vignette`, :func:`chromatic_aberration` -- optional lens effects;
 * :func:`jpeg_roundtrip` -- the frame re-encoded as the photo was (its estimated quality);
-* :func:`match_camera` -- all of it on a composite, with the parameters for the metadata.
+* :func:`match_camera` -- all of it on a composite, with the parameters for the metadata; what
+  it could not match (an object's noise loop not converged, a sharpness beyond the largest blur
+  or sharpening) in ``unmatched``, per object, never silently.
 """
 from __future__ import annotations
 
@@ -193,7 +195,8 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
     ``synthetic``: H x W coverage of the inserted objects (where the render's own, not the
     photo's, values are); with ``ids`` (and the albedo / normal labels as guides), the objects'
     Monte Carlo noise is filtered first (:func:`denoise_objects`). Returns (image, parameters
-    for the metadata)."""
+    for the metadata; ``unmatched``: {object id or "frame": [{"check": "noise_loop" |
+    "blur_clamp", achieved and target numbers}]} when something could not be matched)."""
     h, w = influence.shape
     cx = w / 2 if cx is None else cx
     cy = h / 2 if cy is None else cy
@@ -322,10 +325,12 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
         a = soften(layer[ey0:y0 + wy1 + M, ex0:x0 + wx1 + M], amount, edges[ey0:y0 + wy1 + M, ex0:x0 + wx1 + M])
         return a[y0 + wy0 - ey0:y0 + wy1 - ey0, x0 + wx0 - ex0:x0 + wx1 - ex0]
 
-    def match_sharpness(target: float, wy0: int, wy1: int, wx0: int, wx1: int, mask: np.ndarray) -> float:
+    def match_sharpness(target: float, wy0: int, wy1: int, wx0: int, wx1: int, mask: np.ndarray,
+                        who: Any = None) -> float:
         """The blur (> 0) or sharpening (< 0) that gives the window's ``mask`` the photo's
         sharpness, measured as the camera delivers it (the matching noise added: the same draw
-        for all candidates)."""
+        for all candidates). When the largest amount tried (blur 3, sharpening 2) falls short,
+        that amount, and ``who``'s "blur_clamp" is recorded in ``unmatched``."""
         def measure(amount: float) -> float:
             return sharpness(noisy(window(wy0, wy1, wx0, wx1, amount), wy0, wx0), mask)
 
@@ -346,6 +351,9 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
                 break
             lo_a, lo_v = a, v
         if hi_a is None:
+            if abs(lo_v - target) > 0.02 * target:
+                unmatched.setdefault(who, []).append({"check": "blur_clamp", "amount": float(lo_a), "sharpness": lo_v,
+                                                      "target": target})
             return lo_a
         for _ in range(3):
             a = lo_a + (hi_a - lo_a) * (lo_v - target) / (lo_v - hi_v) if lo_v != hi_v else hi_a
@@ -360,6 +368,9 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
 
     if noise:
         info["noise"] = {"a": fit["a"], "b": fit["b"], "model": "sigma^2 = a y + b (sRGB luminance)"}
+    # What could not be matched, per object id ("frame": the influence no object's box holds):
+    # a list of {"check", achieved and target numbers}.
+    unmatched: Dict[Any, list] = {}
     frame_amount = 0.0
     if blur:
         # NOTE: per object (a near object and a far one, rendered at one resolution, are not
@@ -367,13 +378,13 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
         # for influence no object's box holds.
         target = sharpness(p_enc, ~grow)
         info["photo_sharpness"] = target
-        frame_amount = match_sharpness(target, 0, ch, 0, cw, g) if (owner < 0).any() or not objects else 0.0
+        frame_amount = match_sharpness(target, 0, ch, 0, cw, g, "frame") if (owner < 0).any() or not objects else 0.0
         for k, o in enumerate(objects):
             by0, by1, bx0, bx1 = o["box"]
             wy0, wy1, wx0, wx1 = max(0, by0 - M), min(ch, by1 + M), max(0, bx0 - M), min(cw, bx1 + M)
             mask = np.zeros((wy1 - wy0, wx1 - wx0), bool)
             mask[by0 - wy0:by1 - wy0, bx0 - wx0:bx1 - wx0] = (owner[by0:by1, bx0:bx1] == k)
-            o["amount"] = match_sharpness(target, wy0, wy1, wx0, wx1, mask)
+            o["amount"] = match_sharpness(target, wy0, wy1, wx0, wx1, mask, o["id"])
         info["blur_sigma_px"] = frame_amount if not objects else float(np.median([o["amount"] for o in objects]))
         info["blur_per_object"] = {o["id"]: o["amount"] for o in objects}
     # The softened crop: each pixel as its owner's amount made it.
@@ -404,6 +415,8 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
         jy1, jx1 = min(h, y1 + 16), min(w, x1 + 16)
         rounds = []
         for _ in range(6):
+            for o in objects:
+                o.pop("measured", None)
             f = finished(noisy(crop))[jy0:jy1, jx0:jx1]
             if jpeg_quality is not None:
                 f = jpeg_roundtrip(f, jpeg_quality)
@@ -416,6 +429,7 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
                     continue
                 r2 = (s_i / e_i) ** 2
                 worst = max(worst, abs(math.sqrt(r2) - 1.0))
+                o["measured"] = (abs(math.sqrt(r2) - 1.0), s_i, e_i)
                 gn = o["gain"]
                 g_new = gn / r2
                 last = o.get("last")
@@ -430,6 +444,15 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
                 break
         info["noise_gain_per_object"] = {o["id"]: o["gain"] for o in objects}
         info["noise_loop_worst_error"] = rounds
+        for o in objects:
+            # The last round's measurement (its gain was corrected after it, unmeasured).
+            if "measured" in o and o["measured"][0] >= 0.03:
+                err, s_i, e_i = o["measured"]
+                unmatched.setdefault(o["id"], []).append(
+                    {"check": "noise_loop", "error": err, "max_error": 0.03, "noise": s_i, "photo_noise": e_i,
+                     "gain": o["gain"], "rounds": len(rounds)})
+    if unmatched:
+        info["unmatched"] = unmatched
     out = finished(noisy(crop))
     if jpeg_quality is not None:
         out = jpeg_roundtrip(out, jpeg_quality)
