@@ -68,7 +68,8 @@ OTHER_FOLDERS = {
     "docs/": "`architecture.md` (design, plugins, how to add things), `python_api.md`, `scene_file.md`, "
              "`scenarios.md`, `augmented_photos.md`, `wear.md`, `vehicles.md`, `quality.md`, `denoise.md`, "
              "`benchmarks.md`, `failure_modes.md`, `weather.md`, `texture_lod.md`, `geometry_lod.md`, `extensions.md` "
-             "(C extensions, the change journal), `cluster.md` (runs on a Dask cluster)",
+             "(C extensions, the change journal), `cluster.md` (runs on a Dask cluster), `evaluate.md` (scoring "
+             "detectors on real photos)",
     "assets_manifest/": "which assets exist, where they come from, licences, checksums",
     "fuzz/": "libFuzzer targets of every loader, their seed and regression corpora (`corpus/`), the YAML "
              "mutation fuzzer (`fuzz_yaml.py`); `bench/fuzz.sh` runs them",

@@ -32,7 +32,7 @@ REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 #: files of its own stage or of stages before it. ``synthgen`` is the package's own
 #: ``__init__.py`` and ``__main__.py`` (the public facade); ``scripts`` are bench/ and tools/.
 LAYERS = ["schema", "scene", "background", "post", "outputs", "randomize", "scenario", "frame", "run",
-          "bench", "cli", "synthgen", "scripts"]
+          "evaluate", "bench", "cli", "synthgen", "scripts"]
 
 #: Modules of the package that are not Python files (the native core): below every stage.
 NATIVE = {"synthgen._core"}

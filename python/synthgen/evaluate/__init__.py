@@ -1,0 +1,17 @@
+"""Evaluation: does a detector trained on synthgen images find the objects in real photos.
+
+The stage above :mod:`synthgen.run` (it reads datasets and real label files; nothing below it
+imports it) and below ``bench`` and ``cli``. It holds, as issue 34 builds it:
+
+- :mod:`.score` -- scoring detections against ground truth the COCO way (AP50, AP50:95 with
+  101-point interpolation, recall at 0.1 false positives per image, per class and per size
+  bucket of box height, bootstrap 95% intervals over images), the plain-text table, and
+  detections exported as COCO results or as ``synthgen evaluate detect`` records. Pure numpy:
+  it works without PyTorch;
+- later: the reference detector, its training from synthgen datasets and real label files,
+  and ``synthgen evaluate train|score|detect``.
+
+PyTorch is optional: a module that needs it imports it lazily, inside the functions that use
+it, and a missing torch raises a :class:`synthgen.SynthgenError` naming the Debian packages
+``python3-torch python3-torchvision``. This file imports nothing heavy (no module of its own).
+"""
