@@ -31,7 +31,7 @@ REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 #: The stages of the Python package, bottom to top (docs/architecture.md): a file imports only
 #: files of its own stage or of stages before it. ``synthgen`` is the package's own
 #: ``__init__.py`` and ``__main__.py`` (the public facade); ``scripts`` are bench/ and tools/.
-LAYERS = ["schema", "scene", "background", "post", "outputs", "randomize", "scenario", "frame", "run",
+LAYERS = ["schema", "scene", "background", "post", "outputs", "randomize", "scenario", "frame", "run", "evaluate",
           "bench", "cli", "synthgen", "scripts"]
 
 #: Modules of the package that are not Python files (the native core): below every stage.

@@ -1,0 +1,1 @@
+"""Evaluation: train a reference detector on synthgen datasets and score it on real photos."""
