@@ -8,7 +8,10 @@ imports it) and below ``bench`` and ``cli``. It holds, as issue 34 builds it:
   bucket of box height, bootstrap 95% intervals over images), the plain-text table, and
   detections exported as COCO results or as ``synthgen evaluate detect`` records. Pure numpy:
   it works without PyTorch;
-- later: the reference detector, its training from synthgen datasets and real label files,
+- :mod:`.backbone` -- the reference detector's backbone: ShuffleNetV2 0.5x in Megvii's block
+  layout, its ImageNet-pretrained weights loaded by an explicit key table (checked by BatchNorm
+  statistics on real photos), the input normalisation (needs PyTorch, :mod:`._torch`);
+- later: the rest of the reference detector, its training from synthgen datasets and real label files,
   and ``synthgen evaluate train|score|detect``.
 
 PyTorch is optional: a module that needs it imports it lazily, inside the functions that use
