@@ -11,8 +11,13 @@ imports it) and below ``bench`` and ``cli``. It holds, as issue 34 builds it:
 - :mod:`.backbone` -- the reference detector's backbone: ShuffleNetV2 0.5x in Megvii's block
   layout, its ImageNet-pretrained weights loaded by an explicit key table (checked by BatchNorm
   statistics on real photos), the input normalisation (needs PyTorch, :mod:`._torch`);
-- later: the rest of the reference detector, its training from synthgen datasets and real label files,
-  and ``synthgen evaluate train|score|detect``.
+- :mod:`.targets` -- the detector's CenterNet targets (a Gaussian centre heatmap per class,
+  log box size and sub-cell offset on one stride-8 grid; ignore regions masked), its losses
+  (focal loss, L1), decoding (3 x 3 peaks, top-k) and class-wise NMS in plain torch;
+- :mod:`.detector` -- the reference detector (the backbone, a neck onto stride 8, the CenterNet
+  head), its ``detect``, and its single-file save/load (``Detector.from_file``);
+- later: its training from synthgen datasets and real label files, and
+  ``synthgen evaluate train|score|detect``.
 
 PyTorch is optional: a module that needs it imports it lazily, inside the functions that use
 it, and a missing torch raises a :class:`synthgen.SynthgenError` naming the Debian packages
