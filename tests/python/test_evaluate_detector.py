@@ -183,13 +183,15 @@ def test_nms_matches_a_brute_force_reference(thr):
     n = 300
     xy = rng.uniform(0, 200, (n, 2))
     wh = rng.uniform(5, 60, (n, 2))
-    boxes = np.concatenate([xy, xy + wh], 1)
+    xy[:200] = xy[:200:10].repeat(10, 0) + rng.normal(0, 3, (200, 2))  # 20 clusters of 10 jittered boxes
+    wh[:200] = wh[:200:10].repeat(10, 0) + rng.normal(0, 3, (200, 2))
+    boxes = np.concatenate([xy, xy + np.maximum(wh, 1)], 1)
     scores = rng.integers(0, 50, n) / 50.0  # ties on purpose
     classes = rng.integers(0, 3, n)
     want = _nms_reference(boxes.tolist(), scores.tolist(), classes.tolist(), thr)
     got = T.nms(torch.from_numpy(boxes), torch.from_numpy(scores), torch.from_numpy(classes), thr)
     assert got.tolist() == want
-    assert 0 < len(want) < n
+    assert 0 < len(want) < n - 30  # suppression happened, often
 
 
 def _tiny_batch(seed: int = 0, n: int = 4, H: int = 128, W: int = 256):
