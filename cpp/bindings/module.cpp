@@ -447,26 +447,6 @@ a BVH build). render() commits pending edits first.)doc");
            "(RenderResult.differential); give catchers labels 0.")
       .def("instance_catcher", &Scene::instance_catcher, py::arg("instance"))
       .def("instance_count", &Scene::instance_count)
-      .def("instances",
-           [](const Scene& s) {
-             py::list out;
-             const auto& all = s.instances();
-             for (size_t i = 0; i < all.size(); ++i) {
-               if (!all[i]) continue;
-               py::dict d;
-               d["id"] = i;
-               d["mesh"] = all[i]->mesh_id;
-               d["class_id"] = all[i]->class_id;
-               d["instance_id"] = all[i]->instance_id;
-               d["material"] = all[i]->material_id;
-               d["visible"] = all[i]->visible;
-               d["catcher"] = all[i]->catcher;
-               out.append(d);
-             }
-             return out;
-           },
-           "The live instances, by id: [{'id', 'mesh', 'class_id', 'instance_id', 'material' (-1: the\n"
-           "mesh's), 'visible', 'catcher'}] (what a replayed journal holds).")
       .def("texture_count", &Scene::texture_count, "Live (not removed) textures.")
       .def("material_count", &Scene::material_count, "Live (not removed) materials.")
       .def("set_medium",
@@ -505,21 +485,6 @@ a BVH build). render() commits pending edits first.)doc");
            },
            py::arg("light_id"), py::arg("type"), py::arg("params") = py::dict())
       .def("remove_light", &Scene::remove_light, py::arg("light_id"))
-      .def("lights",
-           [](const Scene& s) {
-             py::list out;
-             const auto& all = s.lights();
-             for (size_t i = 0; i < all.size(); ++i) {
-               if (!all[i]) continue;
-               py::dict d;
-               d["id"] = i;
-               d["type"] = all[i]->type;
-               out.append(d);
-             }
-             return out;
-           },
-           "The live lights added with add_light, by id: [{'id', 'type'}] (emissive materials' area\n"
-           "lights are not among them).")
       .def("remove_texture", &Scene::remove_texture, py::arg("texture_id"),
            "Removes a texture; refused while a texture or material refers to it.")
       .def("remove_material", &Scene::remove_material, py::arg("material_id"),

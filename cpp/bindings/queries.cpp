@@ -1,4 +1,5 @@
-// Bindings of the scene's geometric queries: Scene.instance_coverage (api/scene_queries.cpp).
+// Bindings of the scene's queries: Scene.instance_coverage (api/scene_queries.cpp) and what a scene
+// holds (Scene.instances, Scene.lights).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -35,7 +36,42 @@ void bind_queries(py::class_<Scene>& scene) {
       "listed instance covers nothing, instances not listed are ignored. With first_hit, only where\n"
       "instances[i] is the ray's first hit among all shown instances: its visible mask, where a label-only\n"
       "render shows its id. Rays are traced only where a listed instance's bounds project. Commits pending\n"
-      "edits first; releases the GIL; deterministic whatever the thread count (0: all).");
+      "edits first; releases the GIL; deterministic whatever the thread count (0: all).")
+      .def("instances",
+           [](const Scene& s) {
+             py::list out;
+             const auto& all = s.instances();
+             for (size_t i = 0; i < all.size(); ++i) {
+               if (!all[i]) continue;
+               py::dict d;
+               d["id"] = i;
+               d["mesh"] = all[i]->mesh_id;
+               d["class_id"] = all[i]->class_id;
+               d["instance_id"] = all[i]->instance_id;
+               d["material"] = all[i]->material_id;
+               d["visible"] = all[i]->visible;
+               d["catcher"] = all[i]->catcher;
+               out.append(d);
+             }
+             return out;
+           },
+           "The live instances, by id: [{'id', 'mesh', 'class_id', 'instance_id', 'material' (-1: the\n"
+           "mesh's), 'visible', 'catcher'}] (what a replayed journal holds).")
+      .def("lights",
+           [](const Scene& s) {
+             py::list out;
+             const auto& all = s.lights();
+             for (size_t i = 0; i < all.size(); ++i) {
+               if (!all[i]) continue;
+               py::dict d;
+               d["id"] = i;
+               d["type"] = all[i]->type;
+               out.append(d);
+             }
+             return out;
+           },
+           "The live lights added with add_light, by id: [{'id', 'type'}] (emissive materials' area\n"
+           "lights are not among them).");
 }
 
 }  // namespace sg::bindings
