@@ -34,7 +34,6 @@ Same weights and input give bit-identical features on the CPU.
 from __future__ import annotations
 
 import functools
-import os
 from typing import Any, Dict, List, Tuple
 
 import numpy as np
@@ -182,18 +181,9 @@ def load_pretrained(path: str, module: Any = None) -> Any:
     state_dict of tensors, has keys the table does not know or lacks keys it needs, or a tensor
     of the wrong shape. The module is left untouched on any error."""
     torch = _torch.torch()
-    if not os.path.isfile(path):
-        raise SynthgenError(f"{path}: backbone weights not found")
-    size = os.path.getsize(path)
-    if size > MAX_FILE_BYTES:
-        raise SynthgenError(f"{path}: a backbone weights file of {size} bytes is larger than the "
-                            f"{MAX_FILE_BYTES} bytes a ShuffleNetV2 0.5x state_dict takes")
-    try:
-        state = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # a pickle of anything else, a truncated file, not a torch file
-        why = str(e).split("WeightsUnpickler error:")[-1].strip()[:200]  # not torch's advice to unpickle
-        raise SynthgenError(f"{path}: cannot read the backbone weights as a PyTorch state_dict of "
-                            f"tensors ({type(e).__name__}: {why})") from None
+    state = _torch.load_file(path, MAX_FILE_BYTES, "backbone weights", "backbone weights file",
+                             "a ShuffleNetV2 0.5x state_dict takes",
+                             "the backbone weights as a PyTorch state_dict of tensors")
     if not isinstance(state, dict) or not all(isinstance(v, torch.Tensor) for v in state.values()):
         raise SynthgenError(f"{path}: not a state_dict of tensors (a {type(state).__name__})")
     table = key_table()

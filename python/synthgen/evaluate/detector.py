@@ -30,8 +30,7 @@ CenterNet head, saved to and loaded from one file. (CenterNet: Zhou, Wang and Kr
 from __future__ import annotations
 
 import functools
-import os
-from typing import Any, List, Optional, Sequence, Tuple
+from typing import Any, List, Sequence, Tuple
 
 import numpy as np
 
@@ -176,17 +175,8 @@ def _detector_class() -> type:
 
 def _load(cls: type, path: str) -> Any:
     torch = _torch.torch()
-    if not os.path.isfile(path):
-        raise SynthgenError(f"{path}: detector model not found")
-    size = os.path.getsize(path)
-    if size > MAX_FILE_BYTES:
-        raise SynthgenError(f"{path}: a model file of {size} bytes is larger than the {MAX_FILE_BYTES} bytes "
-                            f"a synthgen detector takes")
-    try:
-        d = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # a pickle of anything else, a truncated file, not a torch file
-        why = str(e).split("WeightsUnpickler error:")[-1].strip()[:200]
-        raise SynthgenError(f"{path}: cannot read a detector model ({type(e).__name__}: {why})") from None
+    d = _torch.load_file(path, MAX_FILE_BYTES, "detector model", "model file", "a synthgen detector takes",
+                         "a detector model")
     if not isinstance(d, dict) or d.get("format") != FORMAT:
         what = f"a dict with format {d.get('format')!r}" if isinstance(d, dict) else f"a {type(d).__name__}"
         raise SynthgenError(f"{path}: not a synthgen detector model ({what}; expected format {FORMAT!r})")
