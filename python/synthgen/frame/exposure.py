@@ -24,7 +24,7 @@ from typing import Any, Dict, Mapping, Tuple
 
 import numpy as np
 
-from ..post.exposure import auto_factor
+from ..post.exposure import auto_factor, metering_pass
 from ..randomize import weather
 
 __all__ = ["frame_exposure", "apply_exposure", "PRE_PASS_SCALE", "PRE_PASS_SPP"]
@@ -33,23 +33,6 @@ __all__ = ["frame_exposure", "apply_exposure", "PRE_PASS_SCALE", "PRE_PASS_SPP"]
 #: at most 4 bounces (night's metering pre-pass does the same): 1/128 of the samples of a 64-spp frame.
 PRE_PASS_SCALE = 4
 PRE_PASS_SPP = 8
-
-
-def _pre_pass(renderer: Any, camera: Any, seed: int) -> np.ndarray:
-    """The frame's linear image at 1 / PRE_PASS_SCALE of its resolution (the camera's view,
-    intrinsics scaled, distortion kept); the scene's camera set back afterwards."""
-    from .._core import PinholeCamera
-
-    q = PRE_PASS_SCALE
-    small = PinholeCamera(camera.fx / q, camera.fy / q, (camera.cx + 0.5) / q - 0.5, (camera.cy + 0.5) / q - 0.5,
-                          max(1, camera.width // q), max(1, camera.height // q),
-                          np.asarray(camera.world_from_camera, np.float64), distortion=tuple(camera.distortion))
-    renderer.scene.set_camera(small)
-    try:
-        pre = renderer.scene.render(spp=PRE_PASS_SPP, max_depth=4, seed=int(seed), threads=renderer.threads)
-    finally:
-        renderer.scene.set_camera(camera)
-    return np.asarray(pre.rgb)
 
 
 def frame_exposure(renderer: Any, exposure: Mapping[str, Any], photo: bool, weather_ctx: Mapping[str, Any],
@@ -71,7 +54,8 @@ def frame_exposure(renderer: Any, exposure: Mapping[str, Any], photo: bool, weat
     if by is not None:
         factor = 2.0 ** ev
         return factor, {"mode": "auto", "factor": factor, "ev": ev, "metered_by": f"weather.{by}"}
-    a = auto_factor(_pre_pass(renderer, camera, seed), float(exposure["key"]), ev)
+    pre = metering_pass(renderer.scene, camera, seed, renderer.threads, PRE_PASS_SCALE, PRE_PASS_SPP)
+    a = auto_factor(pre, float(exposure["key"]), ev)
     return a["factor"], {"mode": "auto", "factor": a["factor"], "ev": ev, "key": float(exposure["key"]),
                          "metered": a["metered"], "highlight": a["highlight"],
                          "highlight_limited": a["highlight_limited"],

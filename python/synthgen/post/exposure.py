@@ -16,7 +16,7 @@ import numpy as np
 from ..schema.fields import Number, Record
 from . import Arrays, PostStep, register
 
-__all__ = ["KEY", "LUMINANCE", "HIGHLIGHT_PERCENTILE", "CLIP_PERCENTILE", "DYNAMIC_RANGE_STOPS", "MAX_STOPS",
+__all__ = ["metering_pass", "KEY", "LUMINANCE", "HIGHLIGHT_PERCENTILE", "CLIP_PERCENTILE", "DYNAMIC_RANGE_STOPS", "MAX_STOPS",
            "luminance", "metering_weights", "meter", "auto_factor"]
 
 SCHEMA = Record({"ev": Number(0.0, min=-20.0, max=20.0, doc="exposure change in stops (the image x 2^ev)")},
@@ -47,6 +47,26 @@ def apply(arrays: Mapping[str, np.ndarray], params: Mapping[str, Any]) -> Arrays
     out = dict(arrays)
     out["rgb"] = (np.asarray(arrays["rgb"], np.float32) * np.float32(2.0 ** float(params["ev"]))).astype(np.float32)
     return out
+
+
+def metering_pass(scene: Any, camera: Any, seed: int, threads: int, scale: int = 4, spp: int = 8) -> np.ndarray:
+    """A camera's light meter: the scene's linear image through ``camera`` at 1 / ``scale`` of
+    its width and height (intrinsics scaled, distortion kept), ``spp`` samples, at most 4
+    bounces, render seed ``seed``; the scene's camera is set back afterwards. Used by the
+    auto-exposure of ``camera.exposure`` (synthgen.frame.exposure) and by the dusk and night
+    conditions' own metering (synthgen.randomize.weather)."""
+    from .._core import PinholeCamera
+
+    q = int(scale)
+    small = PinholeCamera(camera.fx / q, camera.fy / q, (camera.cx + 0.5) / q - 0.5, (camera.cy + 0.5) / q - 0.5,
+                          max(1, camera.width // q), max(1, camera.height // q),
+                          np.asarray(camera.world_from_camera, np.float64), distortion=tuple(camera.distortion))
+    scene.set_camera(small)
+    try:
+        pre = scene.render(spp=spp, max_depth=4, seed=int(seed), threads=threads)
+    finally:
+        scene.set_camera(camera)
+    return np.asarray(pre.rgb)
 
 
 def luminance(rgb: np.ndarray) -> np.ndarray:

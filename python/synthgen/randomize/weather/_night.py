@@ -23,6 +23,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from ...post.exposure import metering_pass
 from ...schema.fields import EMPTY, Bool, Choice, Number, Record
 from ...schema.random import R
 from ..lamps import sky_units
@@ -411,19 +412,9 @@ def meter(ctx: WeatherContext, quarter: int = 4, spp: int = 8) -> np.ndarray:
     """The frame's luminance (linear, the render's units) from a metering pre-pass: the camera
     at a quarter of the resolution, ``spp`` samples, the condition's lights, averaged over 2 x 2
     pixels (a camera's light meter; about 1.5% of a 32-spp render)."""
-    from ..._core import PinholeCamera
-
-    r, cam = ctx.renderer, ctx.camera
-    w, h = cam.width, cam.height
-    small = PinholeCamera(cam.fx / quarter, cam.fy / quarter, (cam.cx + 0.5) / quarter - 0.5,
-                          (cam.cy + 0.5) / quarter - 0.5, max(1, w // quarter), max(1, h // quarter),
-                          np.asarray(cam.world_from_camera, np.float64), distortion=tuple(cam.distortion))
-    r.scene.set_camera(small)
-    try:
-        pre = r.scene.render(spp=spp, max_depth=4, seed=int(ctx.seed), threads=r.threads)
-    finally:
-        r.scene.set_camera(cam)
-    y = np.asarray(pre.rgb, np.float64)[..., :3] @ _Y
+    r = ctx.renderer
+    pre = metering_pass(r.scene, ctx.camera, ctx.seed, r.threads, quarter, spp)
+    y = np.asarray(pre, np.float64)[..., :3] @ _Y
     hh, ww = (y.shape[0] // 2) * 2, (y.shape[1] // 2) * 2
     if hh and ww:
         y = y[:hh, :ww].reshape(hh // 2, 2, ww // 2, 2).mean(axis=(1, 3))
