@@ -66,14 +66,9 @@ def _timed_out(frame: int, seconds: float) -> Dict[str, Any]:
 
 
 def _died(frame: int, exitcode: Optional[int], journal: str = "") -> Dict[str, Any]:
-    how = ""
-    if exitcode is not None and exitcode < 0:
-        try:
-            how = f" (killed by {signal.Signals(-exitcode).name})"
-        except ValueError:
-            how = f" (killed by signal {-exitcode})"
-    elif exitcode is not None:
-        how = f" (exit code {exitcode})"
+    from ..scene.extensions import exit_description
+
+    how = exit_description(exitcode)
     return {"frame": frame, "ok": False, "pid": None,
             "error": f"WorkerDied: the worker process died while rendering frame {frame}{how}, again when the frame "
                      "was rendered alone: a crash in native code (a C extension?) or the out-of-memory killer; the "
