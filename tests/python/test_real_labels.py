@@ -390,3 +390,26 @@ def test_a_labelme_object_that_cannot_be_read_is_an_error_not_dropped(tmp_path):
                                         {"label": "car", "points": [[1, 2], [30, 40]], "shape_type": "rectangle"}]}))
     objs = read_labels(str(f), "labelme", "a.jpg", (200, 100), {"car": "car", "pole": None, "lane": None})
     assert [(o.cls, list(o.box)) for o in objs] == [("car", [1.0, 2.0, 30.0, 40.0])]
+
+
+def test_openalpr_plate_labels(tmp_path):
+    """OpenALPR's benchmark files (file<TAB>x<TAB>y<TAB>w<TAB>h<TAB>PLATE_TEXT: top-left corner
+    and size in pixels): class 'plate', box [x, y, x + w, y + h]; a line naming another image, a
+    malformed line and an empty box are errors naming the line."""
+    f = tmp_path / "eu7.txt"
+    f.write_text("eu7.jpg\t396\t340\t203\t46\tM5XSX\neu7.jpg\t10.5\t20\t30\t8\tAB 123\n")
+    assert label_images(str(f), "openalpr") == ["eu7.jpg"]
+    objs = read_label_file(str(f), "openalpr", "/photos/eu7.jpg", (800, 600))
+    assert [(o.cls, o.box, o.ignore, o.source) for o in objs] == [
+        ("plate", [396.0, 340.0, 599.0, 386.0], False, f"{f}:1"), ("plate", [10.5, 20.0, 40.5, 28.0], False, f"{f}:2")]
+    lf = load_labels(str(f), "openalpr", "eu7.jpg", (800, 600), {"plate": "licence_plate"})
+    assert [o.cls for o in lf.objects] == ["licence_plate"] * 2
+    for text, error in (("eu8.jpg\t1\t2\t3\t4\tX\n", r"eu7.txt:1: the plate is for image 'eu8.jpg', the photo is "
+                                                     r"'eu7.jpg' \(an OpenALPR file holds the plates of one image\)"),
+                        ("eu7.jpg 1 2 3 4 X\n", r"eu7.txt:1: expected an OpenALPR line 'file<TAB>x<TAB>y<TAB>width"),
+                        ("\neu7.jpg\t1\t2\tx\t4\tX\n", r"eu7.txt:2: expected an OpenALPR line"),
+                        ("eu7.jpg\t1\t2\t0\t4\tX\n", r"eu7.txt:1: the plate's width and height \(4th and 5th fields\) "
+                                                     r"must be above 0, got 'eu7.jpg\t1\t2\t0\t4\tX'")):
+        f.write_text(text)
+        with pytest.raises(sg.SynthgenError, match=error):
+            read_label_file(str(f), "openalpr", "eu7.jpg")

@@ -1,5 +1,6 @@
 """Readers of the label files users have: labelme JSON, COCO JSON, YOLO txt, KITTI label txt,
-CSV (``image,x0,y0,x1,y1[,class]``) and Pascal VOC XML. :func:`read_label_file` reads the objects
+CSV (``image,x0,y0,x1,y1[,class]``), Pascal VOC XML and OpenALPR's plate ``.txt``
+(``file<TAB>x<TAB>y<TAB>w<TAB>h<TAB>PLATE_TEXT``, class ``plate``). :func:`read_label_file` reads the objects
 of one image with the file's own class names (the calibration's ``classes`` mapping is applied by
 :mod:`.labels`), :func:`label_images` lists the images a file names (every image of a COCO or CSV
 file): one module for a photo's real labels and for whole labelled sets.
@@ -26,7 +27,9 @@ from .formats import MAX_CALIB_BYTES
 
 __all__ = ["RealObject", "read_label_file", "label_images", "LABEL_FORMATS", "box_of"]
 
-LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc")
+LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc", "openalpr")
+#: The class of an OpenALPR file's boxes (the file names none: every line is a licence plate).
+OPENALPR_CLASS = "plate"
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
 #: A VOC file describes one image: a few kilobytes.
 _MAX_VOC_BYTES = 4 * MAX_CALIB_BYTES
@@ -435,6 +438,36 @@ def _voc(path: str, photo: str, size) -> List[RealObject]:
     return out
 
 
+def _openalpr_lines(path: str) -> List[Tuple[int, str, List[float], str]]:
+    """(line, image, [x, y, w, h], plate text) of each line of an OpenALPR benchmark file."""
+    out = []
+    for n, line in enumerate(_read(path, "OpenALPR label file").splitlines(), 1):
+        if not line.strip():
+            continue
+        parts = line.rstrip("\r\n").split("\t")
+        v = [_number(c.strip()) for c in parts[1:5]]
+        if len(parts) < 5 or not parts[0].strip() or any(x is None for x in v):
+            raise SynthgenError(f"{path}:{n}: expected an OpenALPR line 'file<TAB>x<TAB>y<TAB>width<TAB>height"
+                                f"<TAB>PLATE_TEXT' (pixels, tab-separated), got '{line.strip()[:60]}'")
+        if not (v[2] > 0 and v[3] > 0):
+            raise SynthgenError(f"{path}:{n}: the plate's width and height (4th and 5th fields) must be above 0, got "
+                                f"'{line.strip()[:60]}'")
+        out.append((n, parts[0].strip(), v, "\t".join(parts[5:]).strip()))
+    return out
+
+
+def _openalpr(path: str, photo: str, size) -> List[RealObject]:
+    out = []
+    for n, image, (x, y, w, h), _text in _openalpr_lines(path):
+        if not _same_image(image, photo):
+            raise SynthgenError(f"{path}:{n}: the plate is for image '{image}', the photo is '{_file_name(photo)}' "
+                                "(an OpenALPR file holds the plates of one image)")
+        # NOTE: x, y are the plate's top-left corner and w, h its size in pixels: the box is
+        # [x, x + w] x [y, y + h] in continuous coordinates, as COCO's [x, y, w, h].
+        out.append(RealObject(OPENALPR_CLASS, [x, y, x + w, y + h], None, False, f"{path}:{n}"))
+    return out
+
+
 def _check_size(path: str, w: Any, h: Any, size) -> None:
     if isinstance(w, int) and isinstance(h, int) and size is not None and (w, h) != tuple(size):
         raise SynthgenError(f"{path}: its labels are for a {w} x {h} image, the photo is {size[0]} x {size[1]}")
@@ -449,9 +482,12 @@ def read_label_file(path: str, fmt: str, image: str, size: Optional[Sequence[int
     YOLO's ``names[index]`` (the index itself without ``names``). Multi-image files (COCO, CSV)
     find the image's rows by file name (CSV: else by stem); an image a COCO or CSV file does not
     name is an error. Ignore regions (``ignore``): COCO ``iscrowd``, KITTI ``DontCare``, VOC
-    ``difficult``."""
+    ``difficult``. OpenALPR files (class ``plate``) are per image too: a line naming another image is an
+    error."""
     if fmt not in LABEL_FORMATS:
         raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
+    if fmt == "openalpr":
+        return _openalpr(path, image, size)
     if fmt == "labelme":
         return _labelme(path, image, size)
     if fmt == "coco":
@@ -468,7 +504,8 @@ def read_label_file(path: str, fmt: str, image: str, size: Optional[Sequence[int
 def label_images(path: str, fmt: str) -> List[str]:
     """The images label file ``path`` names, as written there: every image of a COCO file and
     every image of a CSV file (in order of first appearance), labelme's ``imagePath``, VOC's
-    ``filename``; none for YOLO and KITTI (a file per image, named after it)."""
+    ``filename``, the images an OpenALPR file's lines name (in order of first appearance); none
+    for YOLO and KITTI (a file per image, named after it)."""
     if fmt not in LABEL_FORMATS:
         raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
     if fmt == "coco":
@@ -479,6 +516,8 @@ def label_images(path: str, fmt: str) -> List[str]:
     if fmt == "labelme":
         d = _json(path, "labelme file")
         return [str(d["imagePath"])] if isinstance(d, dict) and d.get("imagePath") else []
+    if fmt == "openalpr":
+        return list(OrderedDict.fromkeys(ln[1] for ln in _openalpr_lines(path)))
     if fmt == "voc":
         fn = _xml(path, "Pascal VOC file").find("filename")
         return [fn.text.strip()] if fn is not None and fn.text.strip() else []
