@@ -413,3 +413,37 @@ def test_openalpr_plate_labels(tmp_path):
         f.write_text(text)
         with pytest.raises(sg.SynthgenError, match=error):
             read_label_file(str(f), "openalpr", "eu7.jpg")
+
+
+def test_a_whole_label_set_reads_in_one_pass(tmp_path):
+    """read_label_set: every image of a COCO or CSV file with the objects read_label_file gives
+    it; a COCO annotation of no image and two images of one file name are errors, not labels
+    left out."""
+    from synthgen.background.label_files import read_label_set
+
+    c = tmp_path / "set.json"
+    d = {"images": [{"id": 1, "file_name": "a.jpg", "width": 60, "height": 40}, {"id": 2, "file_name": "b.jpg"}],
+         "annotations": [{"image_id": 2, "category_id": 1, "bbox": [1, 2, 3, 4]},
+                         {"image_id": 1, "category_id": 1, "bbox": [5, 6, 7, 8], "iscrowd": 1}],
+         "categories": [{"id": 1, "name": "car"}]}
+    c.write_text(json.dumps(d))
+    got = read_label_set(str(c), "coco")
+    assert [(li.image, li.size, li.where) for li in got] == [("a.jpg", (60, 40), f"{c}: images[0]"),
+                                                             ("b.jpg", None, f"{c}: images[1]")]
+    for li in got:
+        assert [o.meta() for o in li.objects] == [o.meta() for o in read_label_file(str(c), "coco", li.image)]
+    c.write_text(json.dumps({**d, "annotations": d["annotations"] + [{"image_id": 9, "category_id": 1,
+                                                                      "bbox": [1, 2, 3, 4]}]}))
+    with pytest.raises(sg.SynthgenError, match=r"set.json: annotations\[2\]: image_id 9 is no image's"):
+        read_label_set(str(c), "coco")
+    c.write_text(json.dumps({**d, "images": d["images"] + [{"id": 3, "file_name": "a.jpg"}]}))
+    with pytest.raises(sg.SynthgenError, match=r"set.json: images\[2\]: file_name 'a.jpg' is images\[0\]'s too"):
+        read_label_set(str(c), "coco")
+    v = tmp_path / "boxes.csv"
+    v.write_text("b.jpg,1,2,3,4,car\na.jpg,5,6,7,8\nb.jpg,9,10,11,12,van\n")
+    got = read_label_set(str(v), "csv", default_class="truck")
+    assert [(li.image, [(o.cls, o.box) for o in li.objects], li.where) for li in got] == [
+        ("b.jpg", [("car", [1, 2, 3, 4]), ("van", [9, 10, 11, 12])], f"{v}:1"), ("a.jpg", [("truck", [5, 6, 7, 8])],
+                                                                                 f"{v}:2")]
+    with pytest.raises(sg.SynthgenError, match=r"'kitti' is not a multi-image label format"):
+        read_label_set(str(v), "kitti")

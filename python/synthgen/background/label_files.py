@@ -25,9 +25,12 @@ import numpy as np
 from .._core import SynthgenError
 from .formats import MAX_CALIB_BYTES
 
-__all__ = ["RealObject", "read_label_file", "label_images", "LABEL_FORMATS", "box_of"]
+__all__ = ["RealObject", "read_label_file", "label_images", "read_label_set", "LabelledImage", "LABEL_FORMATS",
+           "MULTI_IMAGE_FORMATS", "OPENALPR_CLASS", "box_of"]
 
 LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc", "openalpr")
+#: Formats of one file for many images (the others have a file per image).
+MULTI_IMAGE_FORMATS = ("coco", "csv")
 #: The class of an OpenALPR file's boxes (the file names none: every line is a licence plate).
 OPENALPR_CLASS = "plate"
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
@@ -178,24 +181,24 @@ def _coco(path: str, photo: str, size) -> List[RealObject]:
         raise SynthgenError(f"{path}: no image with file_name '{name}'")
     _check_size(path, image.get("width"), image.get("height"), size)
     cats = {c.get("id"): str(c.get("name")) for c in d["categories"] if isinstance(c, dict)}
-    out = []
-    for i, a in enumerate(d["annotations"]):
-        if not isinstance(a, dict) or a.get("image_id") != image.get("id"):
-            continue
-        where = f"{path}: annotations[{i}]"
-        bb = a.get("bbox")
-        if (not isinstance(bb, list) or len(bb) != 4 or
-                not all(isinstance(v, (int, float)) and math.isfinite(v) for v in bb)):
-            raise SynthgenError(f"{where}: bbox must be [x, y, width, height]")
-        if a.get("category_id") not in cats:
-            raise SynthgenError(f"{where}: category_id {a.get('category_id')!r} is not in categories")
-        poly = None
-        seg = a.get("segmentation")
-        if isinstance(seg, list) and seg and isinstance(seg[0], list) and len(seg[0]) >= 6:
-            poly = _finite_points(np.asarray(seg[0], float).reshape(-1, 2), where)
-        x, y, w, h = (float(v) for v in bb)
-        out.append(RealObject(cats[a["category_id"]], [x, y, x + w, y + h], poly, bool(a.get("iscrowd", 0)), where))
-    return out
+    return [_coco_object(path, i, a, cats) for i, a in enumerate(d["annotations"])
+            if isinstance(a, dict) and a.get("image_id") == image.get("id")]
+
+
+def _coco_object(path: str, i: int, a: Dict[str, Any], cats: Dict[Any, str]) -> RealObject:
+    where = f"{path}: annotations[{i}]"
+    bb = a.get("bbox")
+    if (not isinstance(bb, list) or len(bb) != 4 or
+            not all(isinstance(v, (int, float)) and math.isfinite(v) for v in bb)):
+        raise SynthgenError(f"{where}: bbox must be [x, y, width, height]")
+    if a.get("category_id") not in cats:
+        raise SynthgenError(f"{where}: category_id {a.get('category_id')!r} is not in categories")
+    poly = None
+    seg = a.get("segmentation")
+    if isinstance(seg, list) and seg and isinstance(seg[0], list) and len(seg[0]) >= 6:
+        poly = _finite_points(np.asarray(seg[0], float).reshape(-1, 2), where)
+    x, y, w, h = (float(v) for v in bb)
+    return RealObject(cats[a["category_id"]], [x, y, x + w, y + h], poly, bool(a.get("iscrowd", 0)), where)
 
 
 def _yolo(path: str, photo: str, size, names: Optional[Sequence[str]]) -> List[RealObject]:
@@ -330,6 +333,10 @@ def _csv(path: str, photo: str, size, default_class: Optional[str]) -> List[Real
     if len(rows) > _MAX_OBJECTS:
         raise SynthgenError(f"{path}: {len(rows)} boxes for image '{t.images[mine[0]]}', more than the "
                             f"{_MAX_OBJECTS} one image can have")
+    return _csv_objects(path, t, rows, default_class)
+
+
+def _csv_objects(path: str, t: _CsvTable, rows: np.ndarray, default_class: Optional[str]) -> List[RealObject]:
     out = []
     for r in rows.tolist():
         c = int(t.cls[r])
@@ -522,3 +529,69 @@ def label_images(path: str, fmt: str) -> List[str]:
         fn = _xml(path, "Pascal VOC file").find("filename")
         return [fn.text.strip()] if fn is not None and fn.text.strip() else []
     return []
+
+
+@dataclass
+class LabelledImage:
+    """One image of a multi-image label file, with its objects (:func:`read_label_set`)."""
+
+    image: str                              #: the image's name as the file writes it
+    objects: List[RealObject]               #: its objects, the file's class names
+    size: Optional[Tuple[int, int]] = None  #: (width, height) where the file states it
+    where: str = ""                         #: the file and the image's index or first line
+
+
+def read_label_set(path: str, fmt: str, default_class: Optional[str] = None) -> List[LabelledImage]:
+    """Every image of a multi-image label file (COCO, CSV) with its objects, the file parsed
+    once and its rows grouped in one pass (not :func:`read_label_file` per image, which scans the
+    whole file each time): the same objects, class names and errors as :func:`read_label_file`,
+    in the order of the file's images (COCO: ``images``; CSV: first appearance). Nothing is left
+    out unsaid: a COCO annotation whose ``image_id`` is no image's, or two COCO images of one
+    ``file_name``, is an error."""
+    if fmt not in MULTI_IMAGE_FORMATS:
+        raise SynthgenError(f"{path}: '{fmt}' is not a multi-image label format ({', '.join(MULTI_IMAGE_FORMATS)}): "
+                            "read its files one image at a time (read_label_file)")
+    if fmt == "csv":
+        t: _CsvTable = _cached(path, "csv", lambda: _csv_file(path))
+        order = np.argsort(t.image, kind="stable")
+        starts = np.searchsorted(t.image[order], np.arange(len(t.images) + 1))
+        out = []
+        for k, name in enumerate(t.images):
+            rows = order[starts[k]:starts[k + 1]]
+            if len(rows) > _MAX_OBJECTS:
+                raise SynthgenError(f"{path}: {len(rows)} boxes for image '{name}', more than the {_MAX_OBJECTS} one "
+                                    "image can have")
+            out.append(LabelledImage(name, _csv_objects(path, t, rows, default_class), None,
+                                     f"{path}:{int(t.line[rows[0]])}"))
+        return out
+    d = _cached(path, "coco", lambda: _coco_file(path))
+    cats = {c.get("id"): str(c.get("name")) for c in d["categories"] if isinstance(c, dict)}
+    by_id: Dict[Any, int] = {}
+    names: Dict[str, int] = {}
+    for k, im in enumerate(d["images"]):
+        if not isinstance(im, dict) or not isinstance(im.get("file_name"), str) or not im["file_name"] or \
+                isinstance(im.get("id"), (dict, list)) or im.get("id") is None:
+            raise SynthgenError(f"{path}: images[{k}]: an image needs an 'id' and a 'file_name'")
+        if im["id"] in by_id:
+            raise SynthgenError(f"{path}: images[{k}]: id {im['id']!r} is images[{by_id[im['id']]}]'s too")
+        if im["file_name"] in names:
+            raise SynthgenError(f"{path}: images[{k}]: file_name '{im['file_name']}' is images[{names[im['file_name']]}]'s "
+                                "too")
+        by_id[im["id"]] = k
+        names[im["file_name"]] = k
+    objects: List[List[RealObject]] = [[] for _ in d["images"]]
+    for i, a in enumerate(d["annotations"]):
+        k = by_id.get(a.get("image_id")) if isinstance(a, dict) and not isinstance(a.get("image_id"), (dict, list)) \
+            else None
+        if k is None:
+            raise SynthgenError(f"{path}: annotations[{i}]: image_id "
+                                f"{a.get('image_id') if isinstance(a, dict) else None!r} is no image's (its label "
+                                "would belong to no image)")
+        objects[k].append(_coco_object(path, i, a, cats))
+    out = []
+    for k, im in enumerate(d["images"]):
+        w, h = im.get("width"), im.get("height")
+        size = (w, h) if isinstance(w, int) and isinstance(h, int) and not isinstance(w, bool) and w > 0 and h > 0 \
+            else None
+        out.append(LabelledImage(im["file_name"], objects[k], size, f"{path}: images[{k}]"))
+    return out
