@@ -453,7 +453,10 @@ def _read_folder(path: str, fmt: Optional[str], images: Optional[str], cm: _Clas
     files = sorted(os.path.join(label_dir, f) for f in os.listdir(label_dir)
                    if os.path.splitext(f)[1].lower() in _PER_IMAGE_EXT and f.lower() not in _NOT_LABELS
                    and os.path.isfile(os.path.join(label_dir, f)))
-    multi = [p for p in files if p.lower().endswith(".csv")]
+    want = {"voc": ".xml", "labelme": ".json", "yolo": ".txt", "kitti": ".txt", "openalpr": ".txt"}.get(fmt or "")
+    if want:  # the format given: its files only
+        files = [p for p in files if p.lower().endswith(want)]
+    multi: List[str] = []
     if label_dir == path:
         multi = sorted(os.path.join(path, f) for f in os.listdir(path) if f.lower().endswith(".csv")) + \
             [p for p in files if p.lower().endswith(".json") and detect_format(p) == "coco"]
@@ -467,7 +470,8 @@ def _read_folder(path: str, fmt: Optional[str], images: Optional[str], cm: _Clas
                          default_class=default_class, names=names)
     if not files:
         raise SynthgenError(f"{path}: no label files (a COCO .json or a .csv naming the images, or a label file per "
-                            f"image: .txt, .xml, .json, in the folder or its {', '.join(_LABEL_DIRS)}/)")
+                            f"image: .txt, .xml, .json, in the folder or its {'/, '.join(_LABEL_DIRS[:-1])}/ or "
+                            f"{_LABEL_DIRS[-1]}/)")
     if multi:
         raise SynthgenError(f"{path}: holds both a file of many images' labels ({os.path.basename(multi[0])}) and "
                             f"per-image label files ({os.path.basename(files[0])}, ...): give the one to read")
