@@ -222,6 +222,9 @@ def test_yolo_folder_takes_image_sizes_from_headers(tmp_path):
     (tmp_path / "labels" / "b.txt").write_text("0 0.5 0.5 0.5 0.5\n")
     with pytest.raises(sg.SynthgenError, match=r"a.txt: YOLO labels need their class names"):
         D.read_real(str(tmp_path))
+    # A mapping of the class indices names them too.
+    s = D.read_real(str(tmp_path), mapping={"0": "car", "1": None})
+    assert [x.classes for x in s] == [["car"], ["car"]] and dict(s.dropped) == {"1": 1}
     (tmp_path / "labels" / "classes.txt").write_text("car\ntruck\n")
     s = D.read_real(str(tmp_path))
     assert _boxes(s[0]) == [([80, 30, 120, 70], "truck", False), ([0, 50, 100, 100], "car", False)]
