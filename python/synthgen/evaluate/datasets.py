@@ -28,7 +28,6 @@ synthgen reads it. No image is decoded: YOLO's fractions take the size from the 
 (EXIF orientation applied). Pure numpy (no PyTorch)."""
 from __future__ import annotations
 
-import glob as _glob
 import json
 import os
 from collections import Counter, OrderedDict
