@@ -390,3 +390,60 @@ def test_a_labelme_object_that_cannot_be_read_is_an_error_not_dropped(tmp_path):
                                         {"label": "car", "points": [[1, 2], [30, 40]], "shape_type": "rectangle"}]}))
     objs = read_labels(str(f), "labelme", "a.jpg", (200, 100), {"car": "car", "pole": None, "lane": None})
     assert [(o.cls, list(o.box)) for o in objs] == [("car", [1.0, 2.0, 30.0, 40.0])]
+
+
+def test_openalpr_plate_labels(tmp_path):
+    """OpenALPR's benchmark files (file<TAB>x<TAB>y<TAB>w<TAB>h<TAB>PLATE_TEXT: top-left corner
+    and size in pixels): class 'plate', box [x, y, x + w, y + h]; a line naming another image, a
+    malformed line and an empty box are errors naming the line."""
+    f = tmp_path / "eu7.txt"
+    f.write_text("eu7.jpg\t396\t340\t203\t46\tM5XSX\neu7.jpg\t10.5\t20\t30\t8\tAB 123\n")
+    assert label_images(str(f), "openalpr") == ["eu7.jpg"]
+    objs = read_label_file(str(f), "openalpr", "/photos/eu7.jpg", (800, 600))
+    assert [(o.cls, o.box, o.ignore, o.source) for o in objs] == [
+        ("plate", [396.0, 340.0, 599.0, 386.0], False, f"{f}:1"), ("plate", [10.5, 20.0, 40.5, 28.0], False, f"{f}:2")]
+    lf = load_labels(str(f), "openalpr", "eu7.jpg", (800, 600), {"plate": "licence_plate"})
+    assert [o.cls for o in lf.objects] == ["licence_plate"] * 2
+    for text, error in (("eu8.jpg\t1\t2\t3\t4\tX\n", r"eu7.txt:1: the plate is for image 'eu8.jpg', the photo is "
+                                                     r"'eu7.jpg' \(an OpenALPR file holds the plates of one image\)"),
+                        ("eu7.jpg 1 2 3 4 X\n", r"eu7.txt:1: expected an OpenALPR line 'file<TAB>x<TAB>y<TAB>width"),
+                        ("\neu7.jpg\t1\t2\tx\t4\tX\n", r"eu7.txt:2: expected an OpenALPR line"),
+                        ("eu7.jpg\t1\t2\t0\t4\tX\n", r"eu7.txt:1: the plate's width and height \(4th and 5th fields\) "
+                                                     r"must be above 0, got 'eu7.jpg\t1\t2\t0\t4\tX'")):
+        f.write_text(text)
+        with pytest.raises(sg.SynthgenError, match=error):
+            read_label_file(str(f), "openalpr", "eu7.jpg")
+
+
+def test_a_whole_label_set_reads_in_one_pass(tmp_path):
+    """read_label_set: every image of a COCO or CSV file with the objects read_label_file gives
+    it; a COCO annotation of no image and two images of one file name are errors, not labels
+    left out."""
+    from synthgen.background.label_files import read_label_set
+
+    c = tmp_path / "set.json"
+    d = {"images": [{"id": 1, "file_name": "a.jpg", "width": 60, "height": 40}, {"id": 2, "file_name": "b.jpg"}],
+         "annotations": [{"image_id": 2, "category_id": 1, "bbox": [1, 2, 3, 4]},
+                         {"image_id": 1, "category_id": 1, "bbox": [5, 6, 7, 8], "iscrowd": 1}],
+         "categories": [{"id": 1, "name": "car"}]}
+    c.write_text(json.dumps(d))
+    got = read_label_set(str(c), "coco")
+    assert [(li.image, li.size, li.where) for li in got] == [("a.jpg", (60, 40), f"{c}: images[0]"),
+                                                             ("b.jpg", None, f"{c}: images[1]")]
+    for li in got:
+        assert [o.meta() for o in li.objects] == [o.meta() for o in read_label_file(str(c), "coco", li.image)]
+    c.write_text(json.dumps({**d, "annotations": d["annotations"] + [{"image_id": 9, "category_id": 1,
+                                                                      "bbox": [1, 2, 3, 4]}]}))
+    with pytest.raises(sg.SynthgenError, match=r"set.json: annotations\[2\]: image_id 9 is no image's"):
+        read_label_set(str(c), "coco")
+    c.write_text(json.dumps({**d, "images": d["images"] + [{"id": 3, "file_name": "a.jpg"}]}))
+    with pytest.raises(sg.SynthgenError, match=r"set.json: images\[2\]: file_name 'a.jpg' is images\[0\]'s too"):
+        read_label_set(str(c), "coco")
+    v = tmp_path / "boxes.csv"
+    v.write_text("b.jpg,1,2,3,4,car\na.jpg,5,6,7,8\nb.jpg,9,10,11,12,van\n")
+    got = read_label_set(str(v), "csv", default_class="truck")
+    assert [(li.image, [(o.cls, o.box) for o in li.objects], li.where) for li in got] == [
+        ("b.jpg", [("car", [1, 2, 3, 4]), ("van", [9, 10, 11, 12])], f"{v}:1"), ("a.jpg", [("truck", [5, 6, 7, 8])],
+                                                                                 f"{v}:2")]
+    with pytest.raises(sg.SynthgenError, match=r"'kitti' is not a multi-image label format"):
+        read_label_set(str(v), "kitti")

@@ -1,5 +1,6 @@
 """Readers of the label files users have: labelme JSON, COCO JSON, YOLO txt, KITTI label txt,
-CSV (``image,x0,y0,x1,y1[,class]``) and Pascal VOC XML. :func:`read_label_file` reads the objects
+CSV (``image,x0,y0,x1,y1[,class]``), Pascal VOC XML and OpenALPR's plate ``.txt``
+(``file<TAB>x<TAB>y<TAB>w<TAB>h<TAB>PLATE_TEXT``, class ``plate``). :func:`read_label_file` reads the objects
 of one image with the file's own class names (the calibration's ``classes`` mapping is applied by
 :mod:`.labels`), :func:`label_images` lists the images a file names (every image of a COCO or CSV
 file): one module for a photo's real labels and for whole labelled sets.
@@ -24,9 +25,14 @@ import numpy as np
 from .._core import SynthgenError
 from .formats import MAX_CALIB_BYTES
 
-__all__ = ["RealObject", "read_label_file", "label_images", "LABEL_FORMATS", "box_of"]
+__all__ = ["RealObject", "read_label_file", "label_images", "read_label_set", "LabelledImage", "LABEL_FORMATS",
+           "MULTI_IMAGE_FORMATS", "OPENALPR_CLASS", "box_of"]
 
-LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc")
+LABEL_FORMATS = ("labelme", "coco", "yolo", "kitti", "csv", "voc", "openalpr")
+#: Formats of one file for many images (the others have a file per image).
+MULTI_IMAGE_FORMATS = ("coco", "csv")
+#: The class of an OpenALPR file's boxes (the file names none: every line is a licence plate).
+OPENALPR_CLASS = "plate"
 _MAX_LABEL_BYTES = 64 * MAX_CALIB_BYTES
 #: A VOC file describes one image: a few kilobytes.
 _MAX_VOC_BYTES = 4 * MAX_CALIB_BYTES
@@ -175,24 +181,24 @@ def _coco(path: str, photo: str, size) -> List[RealObject]:
         raise SynthgenError(f"{path}: no image with file_name '{name}'")
     _check_size(path, image.get("width"), image.get("height"), size)
     cats = {c.get("id"): str(c.get("name")) for c in d["categories"] if isinstance(c, dict)}
-    out = []
-    for i, a in enumerate(d["annotations"]):
-        if not isinstance(a, dict) or a.get("image_id") != image.get("id"):
-            continue
-        where = f"{path}: annotations[{i}]"
-        bb = a.get("bbox")
-        if (not isinstance(bb, list) or len(bb) != 4 or
-                not all(isinstance(v, (int, float)) and math.isfinite(v) for v in bb)):
-            raise SynthgenError(f"{where}: bbox must be [x, y, width, height]")
-        if a.get("category_id") not in cats:
-            raise SynthgenError(f"{where}: category_id {a.get('category_id')!r} is not in categories")
-        poly = None
-        seg = a.get("segmentation")
-        if isinstance(seg, list) and seg and isinstance(seg[0], list) and len(seg[0]) >= 6:
-            poly = _finite_points(np.asarray(seg[0], float).reshape(-1, 2), where)
-        x, y, w, h = (float(v) for v in bb)
-        out.append(RealObject(cats[a["category_id"]], [x, y, x + w, y + h], poly, bool(a.get("iscrowd", 0)), where))
-    return out
+    return [_coco_object(path, i, a, cats) for i, a in enumerate(d["annotations"])
+            if isinstance(a, dict) and a.get("image_id") == image.get("id")]
+
+
+def _coco_object(path: str, i: int, a: Dict[str, Any], cats: Dict[Any, str]) -> RealObject:
+    where = f"{path}: annotations[{i}]"
+    bb = a.get("bbox")
+    if (not isinstance(bb, list) or len(bb) != 4 or
+            not all(isinstance(v, (int, float)) and math.isfinite(v) for v in bb)):
+        raise SynthgenError(f"{where}: bbox must be [x, y, width, height]")
+    if a.get("category_id") not in cats:
+        raise SynthgenError(f"{where}: category_id {a.get('category_id')!r} is not in categories")
+    poly = None
+    seg = a.get("segmentation")
+    if isinstance(seg, list) and seg and isinstance(seg[0], list) and len(seg[0]) >= 6:
+        poly = _finite_points(np.asarray(seg[0], float).reshape(-1, 2), where)
+    x, y, w, h = (float(v) for v in bb)
+    return RealObject(cats[a["category_id"]], [x, y, x + w, y + h], poly, bool(a.get("iscrowd", 0)), where)
 
 
 def _yolo(path: str, photo: str, size, names: Optional[Sequence[str]]) -> List[RealObject]:
@@ -327,6 +333,10 @@ def _csv(path: str, photo: str, size, default_class: Optional[str]) -> List[Real
     if len(rows) > _MAX_OBJECTS:
         raise SynthgenError(f"{path}: {len(rows)} boxes for image '{t.images[mine[0]]}', more than the "
                             f"{_MAX_OBJECTS} one image can have")
+    return _csv_objects(path, t, rows, default_class)
+
+
+def _csv_objects(path: str, t: _CsvTable, rows: np.ndarray, default_class: Optional[str]) -> List[RealObject]:
     out = []
     for r in rows.tolist():
         c = int(t.cls[r])
@@ -435,6 +445,36 @@ def _voc(path: str, photo: str, size) -> List[RealObject]:
     return out
 
 
+def _openalpr_lines(path: str) -> List[Tuple[int, str, List[float], str]]:
+    """(line, image, [x, y, w, h], plate text) of each line of an OpenALPR benchmark file."""
+    out = []
+    for n, line in enumerate(_read(path, "OpenALPR label file").splitlines(), 1):
+        if not line.strip():
+            continue
+        parts = line.rstrip("\r\n").split("\t")
+        v = [_number(c.strip()) for c in parts[1:5]]
+        if len(parts) < 5 or not parts[0].strip() or any(x is None for x in v):
+            raise SynthgenError(f"{path}:{n}: expected an OpenALPR line 'file<TAB>x<TAB>y<TAB>width<TAB>height"
+                                f"<TAB>PLATE_TEXT' (pixels, tab-separated), got '{line.strip()[:60]}'")
+        if not (v[2] > 0 and v[3] > 0):
+            raise SynthgenError(f"{path}:{n}: the plate's width and height (4th and 5th fields) must be above 0, got "
+                                f"'{line.strip()[:60]}'")
+        out.append((n, parts[0].strip(), v, "\t".join(parts[5:]).strip()))
+    return out
+
+
+def _openalpr(path: str, photo: str, size) -> List[RealObject]:
+    out = []
+    for n, image, (x, y, w, h), _text in _openalpr_lines(path):
+        if not _same_image(image, photo):
+            raise SynthgenError(f"{path}:{n}: the plate is for image '{image}', the photo is '{_file_name(photo)}' "
+                                "(an OpenALPR file holds the plates of one image)")
+        # NOTE: x, y are the plate's top-left corner and w, h its size in pixels: the box is
+        # [x, x + w] x [y, y + h] in continuous coordinates, as COCO's [x, y, w, h].
+        out.append(RealObject(OPENALPR_CLASS, [x, y, x + w, y + h], None, False, f"{path}:{n}"))
+    return out
+
+
 def _check_size(path: str, w: Any, h: Any, size) -> None:
     if isinstance(w, int) and isinstance(h, int) and size is not None and (w, h) != tuple(size):
         raise SynthgenError(f"{path}: its labels are for a {w} x {h} image, the photo is {size[0]} x {size[1]}")
@@ -449,9 +489,12 @@ def read_label_file(path: str, fmt: str, image: str, size: Optional[Sequence[int
     YOLO's ``names[index]`` (the index itself without ``names``). Multi-image files (COCO, CSV)
     find the image's rows by file name (CSV: else by stem); an image a COCO or CSV file does not
     name is an error. Ignore regions (``ignore``): COCO ``iscrowd``, KITTI ``DontCare``, VOC
-    ``difficult``."""
+    ``difficult``. OpenALPR files (class ``plate``) are per image too: a line naming another image is an
+    error."""
     if fmt not in LABEL_FORMATS:
         raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
+    if fmt == "openalpr":
+        return _openalpr(path, image, size)
     if fmt == "labelme":
         return _labelme(path, image, size)
     if fmt == "coco":
@@ -468,7 +511,8 @@ def read_label_file(path: str, fmt: str, image: str, size: Optional[Sequence[int
 def label_images(path: str, fmt: str) -> List[str]:
     """The images label file ``path`` names, as written there: every image of a COCO file and
     every image of a CSV file (in order of first appearance), labelme's ``imagePath``, VOC's
-    ``filename``; none for YOLO and KITTI (a file per image, named after it)."""
+    ``filename``, the images an OpenALPR file's lines name (in order of first appearance); none
+    for YOLO and KITTI (a file per image, named after it)."""
     if fmt not in LABEL_FORMATS:
         raise SynthgenError(f"{path}: label format '{fmt}' is not one of {', '.join(LABEL_FORMATS)}")
     if fmt == "coco":
@@ -479,7 +523,75 @@ def label_images(path: str, fmt: str) -> List[str]:
     if fmt == "labelme":
         d = _json(path, "labelme file")
         return [str(d["imagePath"])] if isinstance(d, dict) and d.get("imagePath") else []
+    if fmt == "openalpr":
+        return list(OrderedDict.fromkeys(ln[1] for ln in _openalpr_lines(path)))
     if fmt == "voc":
         fn = _xml(path, "Pascal VOC file").find("filename")
         return [fn.text.strip()] if fn is not None and fn.text.strip() else []
     return []
+
+
+@dataclass
+class LabelledImage:
+    """One image of a multi-image label file, with its objects (:func:`read_label_set`)."""
+
+    image: str                              #: the image's name as the file writes it
+    objects: List[RealObject]               #: its objects, the file's class names
+    size: Optional[Tuple[int, int]] = None  #: (width, height) where the file states it
+    where: str = ""                         #: the file and the image's index or first line
+
+
+def read_label_set(path: str, fmt: str, default_class: Optional[str] = None) -> List[LabelledImage]:
+    """Every image of a multi-image label file (COCO, CSV) with its objects, the file parsed
+    once and its rows grouped in one pass (not :func:`read_label_file` per image, which scans the
+    whole file each time): the same objects, class names and errors as :func:`read_label_file`,
+    in the order of the file's images (COCO: ``images``; CSV: first appearance). Nothing is left
+    out unsaid: a COCO annotation whose ``image_id`` is no image's, or two COCO images of one
+    ``file_name``, is an error."""
+    if fmt not in MULTI_IMAGE_FORMATS:
+        raise SynthgenError(f"{path}: '{fmt}' is not a multi-image label format ({', '.join(MULTI_IMAGE_FORMATS)}): "
+                            "read its files one image at a time (read_label_file)")
+    if fmt == "csv":
+        t: _CsvTable = _cached(path, "csv", lambda: _csv_file(path))
+        order = np.argsort(t.image, kind="stable")
+        starts = np.searchsorted(t.image[order], np.arange(len(t.images) + 1))
+        out = []
+        for k, name in enumerate(t.images):
+            rows = order[starts[k]:starts[k + 1]]
+            if len(rows) > _MAX_OBJECTS:
+                raise SynthgenError(f"{path}: {len(rows)} boxes for image '{name}', more than the {_MAX_OBJECTS} one "
+                                    "image can have")
+            out.append(LabelledImage(name, _csv_objects(path, t, rows, default_class), None,
+                                     f"{path}:{int(t.line[rows[0]])}"))
+        return out
+    d = _cached(path, "coco", lambda: _coco_file(path))
+    cats = {c.get("id"): str(c.get("name")) for c in d["categories"] if isinstance(c, dict)}
+    by_id: Dict[Any, int] = {}
+    names: Dict[str, int] = {}
+    for k, im in enumerate(d["images"]):
+        if not isinstance(im, dict) or not isinstance(im.get("file_name"), str) or not im["file_name"] or \
+                isinstance(im.get("id"), (dict, list)) or im.get("id") is None:
+            raise SynthgenError(f"{path}: images[{k}]: an image needs an 'id' and a 'file_name'")
+        if im["id"] in by_id:
+            raise SynthgenError(f"{path}: images[{k}]: id {im['id']!r} is images[{by_id[im['id']]}]'s too")
+        if im["file_name"] in names:
+            raise SynthgenError(f"{path}: images[{k}]: file_name '{im['file_name']}' is images[{names[im['file_name']]}]'s "
+                                "too")
+        by_id[im["id"]] = k
+        names[im["file_name"]] = k
+    objects: List[List[RealObject]] = [[] for _ in d["images"]]
+    for i, a in enumerate(d["annotations"]):
+        k = by_id.get(a.get("image_id")) if isinstance(a, dict) and not isinstance(a.get("image_id"), (dict, list)) \
+            else None
+        if k is None:
+            raise SynthgenError(f"{path}: annotations[{i}]: image_id "
+                                f"{a.get('image_id') if isinstance(a, dict) else None!r} is no image's (its label "
+                                "would belong to no image)")
+        objects[k].append(_coco_object(path, i, a, cats))
+    out = []
+    for k, im in enumerate(d["images"]):
+        w, h = im.get("width"), im.get("height")
+        size = (w, h) if isinstance(w, int) and isinstance(h, int) and not isinstance(w, bool) and w > 0 and h > 0 \
+            else None
+        out.append(LabelledImage(im["file_name"], objects[k], size, f"{path}: images[{k}]"))
+    return out

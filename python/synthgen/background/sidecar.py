@@ -127,8 +127,8 @@ _DEPTH = Record(
 
 _LABELS = Record(
     {"file": String(doc="label file (paths in a folder's file may use {stem} and {name})"),
-     "format": Choice(list(LABEL_FORMATS), doc="labelme, coco, yolo, kitti, csv (image,x0,y0,x1,y1[,class]) or "
-                                               "voc (Pascal VOC XML)"),
+     "format": Choice(list(LABEL_FORMATS), doc="labelme, coco, yolo, kitti, csv (image,x0,y0,x1,y1[,class]), "
+                                               "voc (Pascal VOC XML) or openalpr (plate .txt)"),
      "classes": MapOf(_MappedClass(None), None, doc="the file's class names -> the scenario's (a name mapped to "
                                                     "null is dropped; every class the file has must be listed)"),
      "names": ListOf(String(), None, doc="yolo: class names in the order of the class indices"),

@@ -16,8 +16,11 @@ imports it) and below ``bench`` and ``cli``. It holds, as issue 34 builds it:
   (focal loss, L1), decoding (3 x 3 peaks, top-k) and class-wise NMS in plain torch;
 - :mod:`.detector` -- the reference detector (the backbone, a neck onto stride 8, the CenterNet
   head), its ``detect``, and its single-file save/load (``Detector.from_file``);
-- later: its training from synthgen datasets and real label files, and
-  ``synthgen evaluate train|score|detect``.
+- :mod:`.datasets` -- the images it trains and is scored on: synthgen datasets (the occlusion
+  rule, a photo frame's real objects and ignore regions), real label sets in every format of
+  :mod:`synthgen.background.label_files` (format detected, class mapping, drops counted) and
+  images without objects, as :class:`.datasets.Sample` records and :mod:`.score` ground truth;
+- later: its training, and ``synthgen evaluate train|score|detect``.
 
 PyTorch is optional: a module that needs it imports it lazily, inside the functions that use
 it, and a missing torch raises a :class:`synthgen.SynthgenError` naming the Debian packages
