@@ -420,7 +420,7 @@ def read_real(path: str, fmt: Optional[str] = None, *, images: Optional[str] = N
         t = lf._cached(path, "csv", lambda: lf._csv_file(path))
         if (t.cls < 0).any():
             raise SynthgenError(f"{path}:{int(t.line[np.argmax(t.cls < 0)])}: the row has no class "
-                                "(image,x0,y0,x1,y1,class): give the class of the file's boxes (default_class)")
+                                "(image,x0,y0,x1,y1,class): give the class of the file's boxes (synthgen evaluate --default-class NAME; default_class in Python)")
     if f in lf.MULTI_IMAGE_FORMATS:
         dirs = [images] if images else _existing(
             [here, os.path.join(here, "images")] +

@@ -20,16 +20,21 @@ CenterNet head, saved to and loaded from one file. (CenterNet: Zhou, Wang and Kr
   default): the CPU batches are a few images, too few for batch statistics.
 * ``save(path)`` writes one file (``torch.save`` of a dict: ``format`` :data:`FORMAT`,
   ``version`` :data:`VERSION`, ``class_names``, ``input_size``, ``normalization`` (``"rgb01"``:
-  RGB values 0..1, :func:`.backbone.normalize`), ``neck_channels`` and the ``state_dict``):
+  RGB values 0..1, :func:`.backbone.normalize`), ``neck_channels``, ``metadata`` (JSON text: how the
+  model was made, the training manifest of :func:`.train.train`; ``{}`` if none; read back as
+  the dict ``model.metadata``) and the ``state_dict``):
   plain containers, strings, numbers and tensors only, so it loads with
   ``torch.load(weights_only=True)`` (no code in a pickle runs). :meth:`Detector.from_file`
   reads it back; anything else is a :class:`synthgen.SynthgenError` naming the file.
 * :func:`deterministic` seeds torch and turns on ``torch.use_deterministic_algorithms``: the
-  same seed, data and steps give bit-identical weights on the CPU.
+  same seed, data and steps give bit-identical weights on the CPU. (On CUDA it sets
+  ``CUBLAS_WORKSPACE_CONFIG``, which cuBLAS needs for it, when unset.)
 """
 from __future__ import annotations
 
 import functools
+import json
+import math
 from typing import Any, List, Sequence, Tuple
 
 import numpy as np
@@ -61,6 +66,9 @@ HEAT_BIAS = -2.19
 def deterministic(seed: int) -> None:
     """Seeds torch's generator and makes its algorithms deterministic (CPU training with the
     same seed, data and steps gives bit-identical weights)."""
+    import os
+
+    os.environ.setdefault("CUBLAS_WORKSPACE_CONFIG", ":4096:8")
     torch = _torch.torch()
     torch.manual_seed(seed)
     torch.use_deterministic_algorithms(True)
@@ -99,6 +107,7 @@ def _detector_class() -> type:
             self.normalization = NORMALIZATION
             self.neck_channels = int(neck_channels)
             self.freeze_backbone_bn = freeze_backbone_bn
+            self.metadata: dict = {}
             self.backbone = _backbone.ShuffleNetV2()
             c8, c16, c32 = _backbone.STAGE_WIDTHS[1:]
             ch = self.neck_channels
@@ -127,9 +136,9 @@ def _detector_class() -> type:
             return {"heat": self.heat(y), "size": self.size(y), "offset": self.offset(y)}
 
         def detect(self, images: Any, *, k: int = 100, threshold: float = 0.05,
-                   iou_threshold: float = 0.5) -> List[Detections]:
+                   iou_threshold: float = 0.5, device: Any = None) -> List[Detections]:
             """Detections of uint8 RGB ``images`` (N x H x W x 3 or H x W x 3): see the module
-            docstring."""
+            docstring. ``device``: where the images go (default: where the model's weights are)."""
             a = np.asarray(images)
             if a.ndim == 3:
                 a = a[None]
@@ -137,6 +146,7 @@ def _detector_class() -> type:
             H, W = x.shape[-2:]
             ph, pw = -(-H // ALIGN) * ALIGN, -(-W // ALIGN) * ALIGN
             x = F.pad(x, (0, pw - W, 0, ph - H))
+            x = x.to(device if device is not None else next(self.parameters()).device)
             was = self.training
             self.eval()
             try:
@@ -147,6 +157,7 @@ def _detector_class() -> type:
                 self.train(was)
             result = []
             for boxes, scores, cls in decoded:
+                boxes, scores, cls = boxes.cpu(), scores.cpu(), cls.cpu()
                 inside = ((boxes[:, 0] + boxes[:, 2]) / 2 < W) & ((boxes[:, 1] + boxes[:, 3]) / 2 < H)
                 boxes, scores, cls = boxes[inside], scores[inside], cls[inside]  # not a centre in the padding
                 boxes = torch.stack((boxes[:, 0].clamp(0, W), boxes[:, 1].clamp(0, H),
@@ -156,12 +167,18 @@ def _detector_class() -> type:
                                          classes=[self.class_names[int(c)] for c in cls[keep]]))
             return result
 
-        def save(self, path: str) -> None:
-            """Writes the model to ``path`` (one file; see the module docstring)."""
-            state = {k: v.detach().clone() for k, v in self.state_dict().items()}
+        def save(self, path: str, metadata: Any = None) -> None:
+            """Writes the model to ``path`` (one file; see the module docstring), with
+            ``metadata`` (plain dicts, lists, strings, numbers: how it was made) when given."""
+            state = {k: v.detach().cpu().clone() for k, v in self.state_dict().items()}
+            meta = dict(metadata if metadata is not None else self.metadata)
+            _check_plain(meta, "metadata")
+            # NOTE: JSON text, not a pickled dict: PyTorch 1.13's weights-only unpickler has no
+            # float opcode (BINFLOAT), so a float in a pickled dict would make the file unreadable.
             torch.save({"format": FORMAT, "version": VERSION, "class_names": list(self.class_names),
                         "input_size": list(self.input_size), "normalization": self.normalization,
-                        "neck_channels": self.neck_channels, "state_dict": state}, path)
+                        "neck_channels": self.neck_channels, "metadata": json.dumps(meta, sort_keys=True),
+                        "state_dict": state}, path)
 
         @classmethod
         def from_file(cls, path: str) -> "Detector":
@@ -204,7 +221,28 @@ def _load(cls: type, path: str) -> Any:
             shape = tuple(t.shape) if isinstance(t, torch.Tensor) else type(t).__name__
             raise SynthgenError(f"{path}: tensor {k} is {shape}, the detector needs {tuple(own[k].shape)}")
     model.load_state_dict(state, strict=True)
+    try:
+        meta = json.loads(d.get("metadata", "{}"))
+    except (TypeError, ValueError) as e:
+        raise SynthgenError(f"{path}: the model's metadata is not JSON text ({e})") from None
+    model.metadata = meta if isinstance(meta, dict) else {}
     return model.eval()
+
+
+def _check_plain(x: Any, where: str) -> None:
+    """Metadata must load with ``weights_only=True``: plain containers, strings, numbers."""
+    if isinstance(x, dict):
+        for k, v in x.items():
+            if not isinstance(k, str):
+                raise SynthgenError(f"detector: {where} key {k!r} is not a string")
+            _check_plain(v, f"{where}.{k}")
+    elif isinstance(x, (list, tuple)):
+        for i, v in enumerate(x):
+            _check_plain(v, f"{where}[{i}]")
+    elif isinstance(x, float) and not math.isfinite(x):
+        raise SynthgenError(f"detector: {where} is {x}; metadata numbers must be finite (JSON)")
+    elif not (x is None or isinstance(x, (str, int, float, bool))):
+        raise SynthgenError(f"detector: {where} is a {type(x).__name__}; metadata holds plain values only")
 
 
 def __getattr__(name: str) -> Any:
