@@ -168,7 +168,8 @@ def scenario_dict(n, seed, spp, v, photo_entries):
         "outputs": ["rgb", "instance", "albedo", "coco"],
     }
     if v["lighting"] == "plain":
-        sc["lights"] = [{"type": "sun", "azimuth": 200, "elevation": 35, "irradiance": [3, 3, 3]}]
+        # behind the camera, high: the cars front-lit (scenario azimuth 0 = -z, the camera looks +z)
+        sc["lights"] = [{"type": "sun", "azimuth": 20, "elevation": 45, "irradiance": [3, 3, 3]}]
     return sc
 
 
