@@ -114,7 +114,7 @@ def frame_calibration(photo, horizon, *, lighting="overcast", labels_csv=None, b
         cal["sun"] = {"azimuth": 180, "elevation": 8}
     name = os.path.basename(photo)
     if labels_csv and boxes is not None and name in boxes:
-        cal["labels"] = [{"file": os.path.abspath(labels_csv), "format": "csv", "class": "car"}]
+        cal["labels"] = [{"file": os.path.realpath(labels_csv), "format": "csv", "class": "car"}]
     else:
         cal["objects"] = []          # a car-free frame: it shows no car to label
     return cal
@@ -196,7 +196,8 @@ def write_scenario(out_dir, frames=None, *, n=None, seed=0, spp=16, labels_csv=N
             region = cal.pop("region")
             f.write("region:\n" + "".join("  - " + json.dumps(p, separators=(", ", ": ")) + "\n" for p in region))
             yaml.safe_dump(cal, f, default_flow_style=None, sort_keys=False)
-        entries.append({"file": os.path.abspath(p), "calibration": rel})
+        # real paths: every checkout that reaches ../shared through a link writes the same text
+        entries.append({"file": os.path.realpath(p), "calibration": rel})
     sc = scenario_dict(n if n is not None else len(frames), seed, spp, v, entries)
     path = os.path.join(out_dir, "scenario.yaml")
     with open(path, "w") as f:
