@@ -60,6 +60,9 @@ VARIANT_DEFAULTS = dict(wear=True, shadow_catcher=True, camera_match=True, denoi
 SUMO = ("mesh/sumo-car-normal-citrus", "mesh/sumo-car-microcargo-citrus",
         "mesh/sumo-car-minibus-citrus")
 TORCS = ("mesh/torcs-p406", "mesh/torcs-155-DTM", "mesh/torcs-acura-nsx-sz")
+# The video's traffic is mostly cars: the saloons (SUMO's car, TORCS' 406) drawn twice as often
+# as the vans and the sports cars.
+WEIGHTS = {"mesh/sumo-car-normal-citrus": 2, "mesh/torcs-p406": 2}
 ONE = "mesh/sumo-car-normal-citrus"
 
 # The real cars' distances: box bottoms at rows 213 - 248 (10th - 90th percentile of
@@ -121,7 +124,9 @@ def frame_calibration(photo, horizon, *, lighting="overcast", labels_csv=None, b
 
 
 def _car(assets, count, v, paint):
-    car = {"class": "car", "asset": {"choice": list(assets)} if len(assets) > 1 else assets[0],
+    asset = ({"choice": list(assets), "weights": [WEIGHTS.get(a, 1) for a in assets]}
+             if len(assets) > 1 else assets[0])
+    car = {"class": "car", "asset": asset,
            "count": count,
            # Along the road (road_direction 90: seen from the side), both ways.
            "yaw": {"choice": [{"normal": [0, 3]}, {"normal": [180, 3]}]},

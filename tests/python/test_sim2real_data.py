@@ -150,6 +150,8 @@ def test_write_scenario_variants(tmp_path):
     assert sc["background"]["match"] == {"denoise": True}
     assert [e["calibration"] for e in sc["background"]["photos"]] == ["cal/vid_4_0.yaml", "cal/vid_4_1.yaml"]
     sumo, torcs = sc["objects"]
+    assert sumo["asset"] == {"choice": list(data.SUMO), "weights": [2, 1, 1]}
+    assert torcs["asset"] == {"choice": list(data.TORCS), "weights": [2, 1, 1]}
     assert sumo["paint"] == {"palette": "cars"} and "paint" not in torcs and "wear" in sumo
     assert {o["class"] for o in sc["objects"]} == {"car"}
     assert "lights" not in sc
