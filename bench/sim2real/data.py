@@ -20,9 +20,10 @@ camera-matched JPEG around them), and with `paste_control` the objects' pixels a
 (sRGB-encoded: no light, no shading, no camera matching) -- flat silhouettes.
 
 `render(cache_dir, n, frames, ...)` writes the scenario, runs `synthgen run --resume` into
-`cache_dir/<hash>/data` (hash: the scenario's and calibrations' texts, post steps excluded) and
-applies the post step into `cache_dir/<hash>/<post>`; an interrupted render continues where it
-stopped, a finished one is reused. It returns the dataset's directory.
+`cache_dir/<hash>/data` (hash: the scenario's and calibrations' texts but its frame count, post
+steps excluded) and applies the post step into `cache_dir/<hash>/<post>`; an interrupted render
+continues where it stopped, a finished one is reused, a longer one adds frames to it. It returns
+the dataset's directory.
 """
 from __future__ import annotations
 
@@ -213,17 +214,24 @@ def write_scenario(out_dir, frames=None, *, n=None, seed=0, spp=16, labels_csv=N
 
 
 def _text_hash(scn_dir):
+    """Hash of the scenario's and calibrations' texts, the scenario's `count:` line left out:
+    frame k depends only on k (photos in turn, per-frame seeds), so a longer render of the same
+    scenario continues the shorter one's frames."""
     h = hashlib.sha256()
     for rel in ["scenario.yaml", "rig.yaml"] + sorted(
             os.path.join("cal", x) for x in os.listdir(os.path.join(scn_dir, "cal"))):
         with open(os.path.join(scn_dir, rel), "rb") as f:
-            h.update(rel.encode() + b"\0" + f.read() + b"\0")
+            text = f.read()
+        if rel == "scenario.yaml":
+            text = b"".join(line for line in text.splitlines(True) if not line.startswith(b"count:"))
+        h.update(rel.encode() + b"\0" + text + b"\0")
     return h.hexdigest()[:16]
 
 
 def render(cache_dir, n, frames=None, *, seed=0, spp=16, labels_csv=None, workers=1, nice=10,
            python=sys.executable, log=None, **variant):
-    """Render n frames of the variant (cached; module docstring); returns the dataset's dir."""
+    """Render n frames of the variant (cached; module docstring); returns the dataset's dir,
+    whose frames 0 .. n-1 are complete (a dataset rendered further before holds more)."""
     v = _knobs(variant)
     base = {k: v[k] for k in v if k not in ("shadow_catcher", "paste_control")}
     stage = os.path.join(cache_dir, "staging")
@@ -232,6 +240,8 @@ def render(cache_dir, n, frames=None, *, seed=0, spp=16, labels_csv=None, worker
     key = _text_hash(stage)
     root = os.path.join(cache_dir, key)
     if os.path.isdir(root):
+        # the same frames; only the count may differ
+        os.replace(os.path.join(stage, "scenario.yaml"), os.path.join(root, "scenario.yaml"))
         shutil.rmtree(stage)
     else:
         os.replace(stage, root)
@@ -244,7 +254,7 @@ def render(cache_dir, n, frames=None, *, seed=0, spp=16, labels_csv=None, worker
         cmd = ["nice", "-n", str(nice)] + cmd
     env = dict(os.environ, PYTHONPATH=os.path.join(REPO, "python") + os.pathsep + os.environ.get("PYTHONPATH", ""))
     res = subprocess.run(cmd, env=env, stdout=log, stderr=subprocess.STDOUT if log else None)
-    if res.returncode not in (0, 3):
+    if res.returncode != 0:
         raise SynthgenError(f"synthgen run failed (exit status {res.returncode}): {' '.join(cmd)}")
     if v["paste_control"]:
         return post_composite(data, os.path.join(root, "paste_control"), albedo=True)
@@ -272,15 +282,27 @@ def composite_frame(photo_rgb, rgb, instance, albedo=None):
     return out
 
 
+def _link_or_copy(src, dst):
+    try:
+        os.link(src, dst)
+    except OSError:
+        shutil.copy2(src, dst)
+
+
 def post_composite(data, out, *, albedo):
-    """Copy dataset `data` into `out` (labels, masks, meta as they are) with every frame's
-    image replaced by composite_frame(). The photo must fill the frame unscaled (zoom 1)."""
+    """Copy dataset `data` into `out` (labels, masks, meta as they are: hard links) with every
+    frame's image replaced by composite_frame(). The photo must fill the frame unscaled (zoom 1)."""
     from synthgen import read_dataset
     done = os.path.join(out, ".complete")
-    if os.path.exists(done):
+    # the marker holds the source's run summary: a source rendered further since is redone
+    with open(os.path.join(data, "run_summary.json"), "rb") as f:
+        stamp = hashlib.sha256(f.read()).hexdigest()
+    if os.path.exists(done) and open(done).read() == stamp:
         return out
     shutil.rmtree(out, ignore_errors=True)
-    shutil.copytree(data, out, ignore=shutil.ignore_patterns("albedo"))
+    # hard links (the metadata lists every file, albedo included: a frame missing one is not
+    # complete); each image is unlinked before it is written, so the source keeps its own
+    shutil.copytree(data, out, copy_function=_link_or_copy)
     ds = read_dataset(data)
     for k in ds.frames:
         fr = ds.frame(k)
@@ -296,6 +318,9 @@ def post_composite(data, out, *, albedo):
                              f"{fr.instance_id.shape[0]} frame: the post step needs the photo unscaled (zoom 1)")
         rgb8 = np.asarray(Image.open(os.path.join(data, "images", f"{k:06d}.png")).convert("RGB"))
         img = composite_frame(ph, rgb8, fr.instance_id, fr.albedo if albedo else None)
-        Image.fromarray(img).save(os.path.join(out, "images", f"{k:06d}.png"))
-    open(done, "w").close()
+        dst = os.path.join(out, "images", f"{k:06d}.png")
+        os.remove(dst)
+        Image.fromarray(img).save(dst)
+    with open(done, "w") as f:
+        f.write(stamp)
     return out

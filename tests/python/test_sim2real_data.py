@@ -199,9 +199,9 @@ def test_composite_frame_by_hand():
 
 
 def test_tiny_render_cache_and_post_steps(tmp_path):
-    """One frame at 1 spp through data.render: cached (a second call renders nothing), and the
-    paste control / no-catcher datasets keep the labels byte for byte, the photo's pixels
-    outside the objects and the albedo's (or the frame's) inside."""
+    """One frame at 1 spp through data.render: cached (a second call renders nothing, a call
+    for two frames adds one), and the paste control / no-catcher datasets keep the labels byte
+    for byte, the photo's pixels outside the objects and the albedo's (or the frame's) inside."""
     photos = _photos(tmp_path, 1)
     cache = tmp_path / "cache"
     kw = dict(seed=3, spp=1, camera_match=False, vehicles="one", wear=False)
@@ -222,6 +222,12 @@ def test_tiny_render_cache_and_post_steps(tmp_path):
         p = data.render(str(cache), 1, photos, **dict(kw, **{knob: knob == "paste_control"}))
         assert p != d and os.path.basename(p) == ("paste_control" if knob == "paste_control" else "no_shadow_catcher")
         assert open(os.path.join(p, "annotations", "coco.json")).read() == open(os.path.join(d, "annotations", "coco.json")).read()
+        assert len(sg.read_dataset(p)) == 1              # every file its metadata lists is there
         img = np.asarray(Image.open(os.path.join(p, "images", "000000.png")).convert("RGB"))
         assert np.array_equal(img[inst == 0], ph[inst == 0])
         assert np.array_equal(img[inst > 0], inside[inst > 0])
+    # two frames: the same cache, frame 0 kept byte for byte, the post step redone
+    assert data.render(str(cache), 2, photos, **kw) == d
+    assert len(sg.read_dataset(d)) == 2
+    assert np.array_equal(np.asarray(Image.open(os.path.join(d, "images", "000000.png")).convert("RGB")), rendered)
+    assert len(sg.read_dataset(data.render(str(cache), 2, photos, **dict(kw, paste_control=True)))) == 2
