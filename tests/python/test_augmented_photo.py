@@ -307,3 +307,22 @@ def test_the_white_balance_is_measured_on_the_placement_region(tmp_path):
         wbs[region] = np.array(f.meta["background"]["exposure"]["white_balance"])
     assert np.allclose(wbs[True], 1.0, atol=0.03), wbs
     assert wbs[False][1] > 1.2 * max(wbs[False][0], wbs[False][2]), wbs
+
+
+def test_the_dome_of_a_distorted_photo_maps_no_nan(recwarn):
+    """A barrel lens (the highway rig's k1 -0.223, k2 0.045) folds beyond the photo's corners:
+    the directions past the fold map to NaN or to coordinates beyond any integer. They lie
+    outside the photo (the dome's top / bottom means there) and reach no integer cast (it
+    warned twice per frame: 'invalid value encountered in cast'); the dome is bit-identical to
+    the one before (checked once by hand on this photo)."""
+    from synthgen.frame.photo import photo_dome
+    cal = Calibration(width=676, height=380, fx=338.0, fy=338.0, cx=338.0, cy=190.0, camera_height=2.1,
+                      pitch=2.54, roll=0.0, distortion=(-0.223, 0.045, 0, 0, 0))
+    photo = np.random.default_rng(0).random((380, 676, 3)).astype(np.float32)
+    dome = photo_dome(photo, cal, width=128)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+    assert np.isfinite(dome).all()
+    top = photo[:380 // 7].reshape(-1, 3).mean(axis=0)
+    bottom = photo[-(380 // 5):].reshape(-1, 3).mean(axis=0)
+    # behind the camera (the dome's seam, u = 0) nothing of the photo: the means
+    assert np.allclose(dome[0, 0], top) and np.allclose(dome[-1, 0], bottom)

@@ -198,6 +198,11 @@ def photo_dome(photo: np.ndarray, calibration: Any, width: int = 512) -> np.ndar
     px = calibration.fx * x + calibration.cx - 0.5
     py = calibration.fy * y + calibration.cy - 0.5
     inside = front & (px >= 0) & (px <= pw - 1) & (py >= 0) & (py <= ph - 1)
+    # NOTE: directions far outside the photo (past a barrel lens's fold) map to NaN or to
+    # coordinates beyond any integer; they are outside (the means above), so they are clipped
+    # to the photo before the cast instead of after it.
+    px = np.clip(np.nan_to_num(px, nan=-1.0), -1.0, float(pw))
+    py = np.clip(np.nan_to_num(py, nan=-1.0), -1.0, float(ph))
     x0 = np.clip(np.floor(px).astype(int), 0, pw - 2)
     y0 = np.clip(np.floor(py).astype(int), 0, ph - 2)
     fx, fy = np.clip(px - x0, 0, 1)[..., None], np.clip(py - y0, 0, 1)[..., None]
