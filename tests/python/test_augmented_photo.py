@@ -280,3 +280,49 @@ def test_weather_with_photo_backgrounds_is_an_error_at_its_key(tmp_path, photo_d
                                                    r"it needs the photo's depth map"):
             check_inputs(load_scenario(path))
 
+
+
+def test_the_white_balance_is_measured_on_the_placement_region(tmp_path):
+    """The light's colour comes from the ground around the objects in the placement region
+    only: the catcher's albedo stands for the region's ground, so grass around it (here: the
+    photo's ground outside a band tinted green) must not turn the light green. With the region,
+    the white balance is within 3 % of neutral (the photo's band is the render's own ground);
+    the same photo without a region gets the grass's colour (G above R and B by more than 20 %)."""
+    d = tmp_path / "photos"
+    d.mkdir()
+    rgb = _photo(str(tmp_path / "street.exr"))
+    grass = rgb * np.array([0.5, 1.3, 0.4], np.float32)
+    band = (70, 112)
+    photo = grass.copy()
+    photo[band[0]:band[1]] = rgb[band[0]:band[1]]
+    _write_exr(str(d / "street.exr"), photo)
+    wbs = {}
+    for region in (True, False):
+        (d / "calibration.yaml").write_text(
+            CALIBRATION + "objects: []\n" +
+            (f"region:\n  - [[0, {band[0]}], [{W}, {band[0]}], [{W}, {band[1]}], [0, {band[1]}]]\n" if region else ""))
+        f = next(iter(sg.Scenario(_scenario(tmp_path)).frames(0, 1)))
+        assert f.objects, "an object was inserted"
+        assert f.meta["background"]["exposure"]["from"] == "ring around the objects"
+        wbs[region] = np.array(f.meta["background"]["exposure"]["white_balance"])
+    assert np.allclose(wbs[True], 1.0, atol=0.03), wbs
+    assert wbs[False][1] > 1.2 * max(wbs[False][0], wbs[False][2]), wbs
+
+
+def test_the_dome_of_a_distorted_photo_maps_no_nan(recwarn):
+    """A barrel lens (the highway rig's k1 -0.223, k2 0.045) folds beyond the photo's corners:
+    the directions past the fold map to NaN or to coordinates beyond any integer. They lie
+    outside the photo (the dome's top / bottom means there) and reach no integer cast (it
+    warned twice per frame: 'invalid value encountered in cast'); the dome is bit-identical to
+    the one before (checked once by hand on this photo)."""
+    from synthgen.frame.photo import photo_dome
+    cal = Calibration(width=676, height=380, fx=338.0, fy=338.0, cx=338.0, cy=190.0, camera_height=2.1,
+                      pitch=2.54, roll=0.0, distortion=(-0.223, 0.045, 0, 0, 0))
+    photo = np.random.default_rng(0).random((380, 676, 3)).astype(np.float32)
+    dome = photo_dome(photo, cal, width=128)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+    assert np.isfinite(dome).all()
+    top = photo[:380 // 7].reshape(-1, 3).mean(axis=0)
+    bottom = photo[-(380 // 5):].reshape(-1, 3).mean(axis=0)
+    # behind the camera (the dome's seam, u = 0) nothing of the photo: the means
+    assert np.allclose(dome[0, 0], top) and np.allclose(dome[-1, 0], bottom)

@@ -198,6 +198,11 @@ def photo_dome(photo: np.ndarray, calibration: Any, width: int = 512) -> np.ndar
     px = calibration.fx * x + calibration.cx - 0.5
     py = calibration.fy * y + calibration.cy - 0.5
     inside = front & (px >= 0) & (px <= pw - 1) & (py >= 0) & (py <= ph - 1)
+    # NOTE: directions far outside the photo (past a barrel lens's fold) map to NaN or to
+    # coordinates beyond any integer; they are outside (the means above), so they are clipped
+    # to the photo before the cast instead of after it.
+    px = np.clip(np.nan_to_num(px, nan=-1.0), -1.0, float(pw))
+    py = np.clip(np.nan_to_num(py, nan=-1.0), -1.0, float(ph))
     x0 = np.clip(np.floor(px).astype(int), 0, pw - 2)
     y0 = np.clip(np.floor(py).astype(int), 0, ph - 2)
     fx, fy = np.clip(px - x0, 0, 1)[..., None], np.clip(py - y0, 0, 1)[..., None]
@@ -262,11 +267,20 @@ def exposure_factor(photo: np.ndarray, without: np.ndarray, synthetic_alpha: np.
 
 def frame_exposure(fp: FramePhoto, res: Any, ids: np.ndarray, depth: np.ndarray,
                    boxes: Sequence[Sequence[float]]) -> Tuple[np.ndarray, str]:
-    """:func:`exposure_factor` of a photo frame's render: its ground (instance 0, finite depth)
-    without the objects, in rings around ``boxes``, real objects' boxes excluded."""
+    """:func:`exposure_factor` of a photo frame's render: its ground (instance 0, finite depth;
+    within the placement region when the photo has one) without the objects, in rings around
+    ``boxes``, real objects' boxes excluded."""
     ground = (ids == 0) & np.isfinite(depth)
     exclude = np.zeros(ids.shape, bool)
     h, w = ids.shape
+    if fp.regions:
+        # NOTE: the catcher's albedo is tinted by the region's median colour (ground_albedo),
+        # so only there is photo / render the light's colour; a ring reaching grass or trees
+        # below the horizon would take their colour for the light's.
+        region = np.zeros((h, w), bool)
+        for p in fp.regions:
+            region |= polygon_mask(p, w, h)
+        ground &= region
     for o in fp.objects:
         x0, y0, x1, y1 = (int(round(v)) for v in o.box)
         exclude[max(y0, 0):min(y1, h), max(x0, 0):min(x1, w)] = True
