@@ -112,3 +112,25 @@ def test_project_points_is_project_of_each_point(name):
     assert 0 < behind < 500
     with pytest.raises(sg.SynthgenError, match="N x 3"):
         cam.project_points(np.zeros((4, 2)))
+
+
+def test_image_points_go_through_the_lens():
+    """outputs.render.image_points (plate corners, lamps) with a distorted camera: a small cube
+    off the centre is drawn where image_points puts its centre, not where K alone would (the
+    undistorted projection, tens of pixels away)."""
+    from synthgen.outputs.render import image_points
+
+    cam = sg.PinholeCamera(K["fx"], K["fy"], K["cx"], K["cy"], K["width"], K["height"],
+                           distortion=DISTORTIONS["barrel"])
+    wfo = P.translate([6.0, 1.5, 10.0])
+    s = sg.Scene()
+    b = P.box((0.06, 0.06, 0.06))
+    inst = s.add_instance(s.add_mesh(b["positions"], b["indices"]), wfo.astype(np.float32), class_id=1)
+    s.set_camera(cam)
+    ys, xs = np.nonzero(np.asarray(s.render(spp=1, labels_only=True).instance_id) == inst + 1)
+    centre = np.array([xs.mean() + 0.5, ys.mean() + 0.5])  # pixel centres at +0.5
+    uv, z = image_points(cam, wfo, np.zeros((1, 3)))
+    assert z[0] == pytest.approx(10.0)
+    assert np.abs(uv[0] - centre).max() < 1.0, (uv, centre)
+    plain = K["fx"] * 6.0 / 10.0 + K["cx"], K["fy"] * 1.5 / 10.0 + K["cy"]
+    assert np.abs(np.asarray(plain) - centre).max() > 20.0

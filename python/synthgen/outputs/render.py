@@ -60,11 +60,17 @@ def camera_meta(camera: Any) -> Dict[str, Any]:
 def image_points(camera: Any, world_from_object: np.ndarray, points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     """Image positions (N x 2, continuous pixel coordinates) and camera-space depths (N: z along
     the optical axis, as the depth output) of object-space points (N x 3) of an object placed by
-    ``world_from_object`` (4 x 4), seen by a PinholeCamera."""
+    ``world_from_object`` (4 x 4), seen by a PinholeCamera: through its lens distortion when it
+    has one, as the renderer's rays go (points behind the camera: NaN with a distortion)."""
     p = np.asarray(points, np.float64).reshape(-1, 3)
     cam_from_object = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64)) @ \
         np.asarray(world_from_object, np.float64)
     c = (cam_from_object @ np.c_[p, np.ones(len(p))].T)[:3]
+    if any(float(k) != 0.0 for k in (getattr(camera, "distortion", None) or ())):
+        # NOTE: K alone would put an off-centre point where an undistorted lens draws it (k1 =
+        # -0.3, 676 x 380, fx 338: 44 px off at the image's side): the camera's own projection.
+        world = (np.asarray(world_from_object, np.float64) @ np.c_[p, np.ones(len(p))].T)[:3].T
+        return np.asarray(camera.project_points(world), np.float64), c[2]
     uv = np.asarray(camera.K, np.float64) @ c
     return (uv[:2] / uv[2]).T, c[2]
 
