@@ -54,7 +54,15 @@ def camera_meta(camera: Any) -> Dict[str, Any]:
         "cy": cy,
         "K": [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]],
         "world_from_camera": np.asarray(camera.world_from_camera, dtype=np.float64).tolist(),
+        **_distortion_meta(camera),
     }
+
+
+def _distortion_meta(camera: Any) -> Dict[str, Any]:
+    """{"distortion": [k1, k2, p1, p2, k3]} (OpenCV's model; the image is rendered through it)
+    for a camera with lens distortion, else {}."""
+    d = [float(v) for v in (getattr(camera, "distortion", None) or ())]
+    return {"distortion": d} if any(v != 0.0 for v in d) else {}
 
 
 def image_points(camera: Any, world_from_object: np.ndarray, points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
