@@ -1,6 +1,6 @@
 """Pure synthetic frames for bench/sim2real.py (issue 34: ``sim2real_car_ap50_pure``): a synthgen
 scenario whose camera matches the real side-facing rig of ``../shared/realdata/cars_highway``
-(676 x 380, the rig's horizontal field of view, height and horizon row) looking across a
+(676 x 380, the rig's horizontal field of view, lens distortion, height and horizon row) looking across a
 multi-lane road with library cars driving along its lanes, clutter that is not a car, and a
 sky or an HDR for light. No real pixels: everything in the frames is rendered.
 
@@ -30,8 +30,8 @@ such place in a frame are left out of it (placement.allow_drops: the labels stay
 
     .venv/bin/python bench/sim2real/pure.py -o out/pure -n 30   # render, seconds/frame, box heights vs real
 
-What is not matched: the rig's lens distortion (synthgen's scenario camera is a pinhole one; a
-rig with ``distortion`` is refused rather than silently rendered without it).
+The rig's ``distortion`` (OpenCV k1, k2, p1, p2[, k3], as ``synthgen calibrate`` gives it) goes
+into the scenario camera (camera.k1 ...: the frames are rendered through that lens).
 """
 from __future__ import annotations
 
@@ -81,15 +81,23 @@ def _rig(rig: Optional[Dict[str, Any]]) -> Dict[str, float]:
         if k not in RIG:
             raise SynthgenError(f"write_pure_scenario: rig key {k!r} unknown (known: {', '.join(RIG)})")
         r[k] = v
-    if r["distortion"] is not None and any(float(v) != 0.0 for v in r["distortion"]):
-        raise SynthgenError("write_pure_scenario: rig distortion "
-                            f"{list(r['distortion'])}: synthgen's scenario camera is a pinhole camera "
-                            "(docs/scenarios.md, camera); frames would not match the rig's lens")
+    if r["distortion"] is not None:
+        d = list(r["distortion"])
+        if len(d) not in (4, 5) or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in d):
+            raise SynthgenError(f"write_pure_scenario: rig distortion {d}: expected OpenCV's 4 or 5 numbers "
+                                "[k1, k2, p1, p2(, k3)]")
+        r["distortion"] = [float(v) for v in d] + [0.0] * (5 - len(d))
     if not 0.0 < float(r["fov_x"]) < 180.0:
         raise SynthgenError(f"write_pure_scenario: rig fov_x {r['fov_x']}: must lie in (0, 180) degrees")
     if not float(r["camera_height"]) > 0.1:
         raise SynthgenError(f"write_pure_scenario: rig camera_height {r['camera_height']}: must exceed 0.1 m")
     return {k: (float(v) if k != "distortion" else v) for k, v in r.items()}
+
+
+def _lens(r: Dict[str, Any]) -> Dict[str, float]:
+    """The scenario camera's distortion keys of a rig (none for a lens without distortion)."""
+    d = r["distortion"] or [0.0] * 5
+    return {k: float(v) for k, v in zip(("k1", "k2", "p1", "p2", "k3"), d) if float(v) != 0.0}
 
 
 def _ramp(bands: Sequence[tuple], z0: float, z1: float) -> Dict[str, Any]:
@@ -275,7 +283,7 @@ def scenario_dict(*, seed: int, count: int, spp: int = 16, rig: Optional[Dict[st
         # NOTE: metered auto-exposure (version 2) with up to a stop less: the frames are mostly
         # dark road and trees, and metering them to mid-grey washes out the sky, which the real
         # camera keeps blue.
-        "camera": {"fx": round(fx, 4), "exposure": {"mode": "auto", "ev": {"uniform": [-1.0, 0.0]}},
+        "camera": {"fx": round(fx, 4), **_lens(r), "exposure": {"mode": "auto", "ev": {"uniform": [-1.0, 0.0]}},
                    "pose": {"type": "look_at",
                             "eye": {"uniform": [[-0.5, ch - 0.05, CAMERA_Z[0]], [0.5, ch + 0.05, CAMERA_Z[1]]]},
                             "target": {"uniform": [[-tx, min(ty), 100.0], [tx, max(ty), 100.0]]}}},
@@ -295,7 +303,8 @@ def write_pure_scenario(path: str, *, seed: int, count: int, spp: int = 16, rig:
                         max_depth: int = 4, torcs: bool = True) -> str:
     """Write the pure synthetic scenario (see the module docstring) to ``path``; returns it.
     ``rig``: fov_x (degrees), camera_height (m), horizon (row at 676 x 380; scaled with
-    ``resolution``), distortion (None or zeros: a pinhole camera). ``torcs=False`` leaves out
+    ``resolution``), distortion (None, or OpenCV's [k1, k2, p1, p2(, k3)]: the lens the frames
+    are rendered through; the kitti outputs are refused with it). ``torcs=False`` leaves out
     the TORCS cars (optional assets: Debian torcs-data), keeping SUMO's."""
     sc = scenario_dict(seed=seed, count=count, spp=spp, rig=rig, resolution=resolution, outputs=outputs,
                        max_depth=max_depth, torcs=torcs)

@@ -1,10 +1,10 @@
 """bench/sim2real/pure.py: the pure synthetic scenario of sim2real validates; rendered small, its
 cars stand on the far carriageway below the rig's horizon, and each car's box height is the
 pinhole law's (focal length x the car's height / its depth) for the camera the rig asks for;
-the same arguments write the same file and render the same frames; a rig with lens distortion
-is refused. Also the frame renderer's material slots: a slot whose object became a model with
-its own materials (or a sign) lets go of the previous frame's textures (a variable count used
-to fail the next frame)."""
+the same arguments write the same file and render the same frames; a rig's lens distortion
+goes into the scenario camera, a malformed one is refused. Also the frame renderer's material
+slots: a slot whose object became a model with its own materials (or a sign) lets go of the
+previous frame's textures (a variable count used to fail the next frame)."""
 from __future__ import annotations
 
 import importlib.util
@@ -52,15 +52,19 @@ def test_written_scenario_validates_and_is_reproducible(tmp_path):
     assert "rgb" in d["outputs"] and "coco" in d["outputs"]
 
 
-def test_rig_with_distortion_or_unknown_key_is_refused(tmp_path):
-    with pytest.raises(sg.SynthgenError, match="distortion .*pinhole"):
-        pure.write_pure_scenario(str(tmp_path / "d.yaml"), seed=1, count=1,
-                                 rig={"distortion": [-0.3, 0.1, 0, 0, 0]})
+def test_rig_distortion_goes_into_the_camera_and_bad_rigs_are_refused(tmp_path):
+    p = pure.write_pure_scenario(str(tmp_path / "d.yaml"), seed=1, count=1, rig={"distortion": [-0.3, 0.1, 0, 0.001]})
+    cam = yaml.safe_load(open(p))["camera"]
+    assert (cam["k1"], cam["k2"], cam["p2"]) == (-0.3, 0.1, 0.001) and "p1" not in cam and "k3" not in cam
+    load_scenario(p)  # validates: rgb and coco, no kitti
+    plain = yaml.safe_load(open(pure.write_pure_scenario(str(tmp_path / "z.yaml"), seed=1, count=1,
+                                                         rig={"distortion": [0, 0, 0, 0, 0]})))["camera"]
+    assert not {"k1", "k2", "p1", "p2", "k3"} & set(plain)
+    with pytest.raises(sg.SynthgenError, match=r"rig distortion \[-0.3, 0.1\]: expected OpenCV's 4 or 5"):
+        pure.write_pure_scenario(str(tmp_path / "e.yaml"), seed=1, count=1, rig={"distortion": [-0.3, 0.1]})
     with pytest.raises(sg.SynthgenError, match="rig key 'fov_y' unknown"):
-        pure.write_pure_scenario(str(tmp_path / "d.yaml"), seed=1, count=1, rig={"fov_y": 50})
-    assert not os.path.exists(tmp_path / "d.yaml")
-    # zeros are a pinhole camera: accepted
-    pure.write_pure_scenario(str(tmp_path / "z.yaml"), seed=1, count=1, rig={"distortion": [0, 0, 0, 0, 0]})
+        pure.write_pure_scenario(str(tmp_path / "e.yaml"), seed=1, count=1, rig={"fov_y": 50})
+    assert not os.path.exists(tmp_path / "e.yaml")
 
 
 def test_cars_stand_below_the_horizon_and_scale_with_distance(tmp_path):
