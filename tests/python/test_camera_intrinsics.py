@@ -112,3 +112,91 @@ def test_project_points_is_project_of_each_point(name):
     assert 0 < behind < 500
     with pytest.raises(sg.SynthgenError, match="N x 3"):
         cam.project_points(np.zeros((4, 2)))
+
+
+def test_image_points_go_through_the_lens():
+    """outputs.render.image_points (plate corners, lamps) with a distorted camera: a small cube
+    off the centre is drawn where image_points puts its centre, not where K alone would (the
+    undistorted projection, tens of pixels away)."""
+    from synthgen.outputs.render import image_points
+
+    cam = sg.PinholeCamera(K["fx"], K["fy"], K["cx"], K["cy"], K["width"], K["height"],
+                           distortion=DISTORTIONS["barrel"])
+    wfo = P.translate([6.0, 1.5, 10.0])
+    s = sg.Scene()
+    b = P.box((0.06, 0.06, 0.06))
+    inst = s.add_instance(s.add_mesh(b["positions"], b["indices"]), wfo.astype(np.float32), class_id=1)
+    s.set_camera(cam)
+    ys, xs = np.nonzero(np.asarray(s.render(spp=1, labels_only=True).instance_id) == inst + 1)
+    centre = np.array([xs.mean() + 0.5, ys.mean() + 0.5])  # pixel centres at +0.5
+    uv, z = image_points(cam, wfo, np.zeros((1, 3)))
+    assert z[0] == pytest.approx(10.0)
+    assert np.abs(uv[0] - centre).max() < 1.0, (uv, centre)
+    plain = K["fx"] * 6.0 / 10.0 + K["cx"], K["fy"] * 1.5 / 10.0 + K["cy"]
+    assert np.abs(np.asarray(plain) - centre).max() > 20.0
+
+
+def _scenario_box(tmp_path, name, extra_camera, outputs="[rgb, coco]"):
+    import json
+
+    import yaml
+
+    from synthgen import run as runner
+
+    sc = yaml.safe_load(f"""
+seed: 1
+count: 1
+resolution: [192, 108]
+camera: {{fx: 96, pose: {{type: look_at, eye: [0, 1.45, 0], target: [0, 1.45, 100]}}}}
+objects: [{{class: car, primitive: box, size: [1.8, 1.5, 4.2], region: [-4.51, 7.99, -4.49, 8.01]}}]
+outputs: {outputs}
+render: {{spp: 1, max_depth: 1}}
+""")
+    sc["camera"].update(extra_camera)
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(yaml.safe_dump(sc))
+    s = runner.run(str(path), str(tmp_path / name), progress=False, isolate=False)
+    assert not s["failures"], s["failures"]
+    meta = json.load(open(tmp_path / name / "meta" / "000000.json"))
+    coco = json.load(open(tmp_path / name / "annotations" / "coco.json"))
+    return meta, coco["annotations"][0]["bbox"]
+
+
+def test_scenario_camera_renders_through_its_lens(tmp_path):
+    """camera k1..k3 in a scenario: the frame is drawn through the lens (a box off to the side
+    moves towards the centre, its box as the lens's projection of its edges gives; its amodal
+    pixels through the same lens), the metadata records the coefficients, and KITTI's outputs
+    (no lens in P2) are refused."""
+    plain_meta, plain = _scenario_box(tmp_path, "plain", {})
+    meta, box = _scenario_box(tmp_path, "barrel", {"k1": -0.3, "k2": 0.08})
+    assert "distortion" not in plain_meta["camera"]
+    assert meta["camera"]["distortion"] == pytest.approx([-0.3, 0.08, 0.0, 0.0, 0.0])
+    obj = next(o for o in meta["objects"] if o.get("class") == "car")
+    # Whole and alone: all of it visible, its amodal pixels counted through the same lens.
+    assert obj["visible_pixels"] == obj["amodal_pixels"] and obj["visible_fraction"] == 1.0
+    assert obj["world_from_object"] == next(o for o in plain_meta["objects"]
+                                            if o.get("class") == "car")["world_from_object"]
+    c = meta["camera"]
+    cam = sg.PinholeCamera(c["fx"], c["fy"], c["cx"], c["cy"], c["width"], c["height"],
+                           np.asarray(c["world_from_camera"]), distortion=tuple(c["distortion"]))
+    # The edges of the unit box primitive, placed by its world_from_object (size and pose).
+    t = np.linspace(-0.5, 0.5, 200)
+    edges = []
+    for a in (-0.5, 0.5):
+        for b in (-0.5, 0.5):
+            ca, cb = np.full_like(t, a), np.full_like(t, b)
+            edges += [np.c_[t, ca, cb], np.c_[ca, t, cb], np.c_[ca, cb, t]]
+    p = np.concatenate(edges)
+    pts = (np.c_[p, np.ones(len(p))] @ np.asarray(obj["world_from_object"]).T)[:, :3]
+    uv = cam.project_points(np.asarray(pts))
+    lens = [uv[:, 0].min(), uv[:, 1].min(), uv[:, 0].max(), uv[:, 1].max()]
+    got = [box[0], box[1], box[0] + box[2], box[1] + box[3]]
+    assert np.abs(np.asarray(got) - lens).max() <= 1.0, (got, lens)
+    # Barrel distortion pulls the off-centre box towards the image centre (96).
+    assert abs(box[0] + 0.5 * box[2] - 96) < abs(plain[0] + 0.5 * plain[2] - 96) - 3
+    import synthgen.scenario as scn
+
+    bad = tmp_path / "k.yaml"
+    bad.write_text((tmp_path / "barrel.yaml").read_text().replace("- rgb\n- coco", "- rgb\n- kitti"))
+    with pytest.raises(sg.SynthgenError, match="camera.k1: lens distortion with the kitti output: KITTI's P2"):
+        scn.load_scenario(str(bad))

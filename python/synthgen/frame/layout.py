@@ -17,7 +17,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
-from .._core import PinholeCamera, Scene
+from .._core import PinholeCamera, Scene, SynthgenError
 from ..scene import primitives as P
 from .records import PlacedObject
 
@@ -278,12 +278,28 @@ def bit_mask(bits: np.ndarray, i: int) -> np.ndarray:
 
 
 def _padded(camera: PinholeCamera, resolution: Tuple[int, int]) -> Tuple[PinholeCamera, int, int]:
-    """(the camera on a canvas padded by TRUNCATION_PAD on every side, the padding in x, in y)."""
+    """(the camera on a canvas padded by TRUNCATION_PAD on every side, the padding in x, in y),
+    with the camera's lens distortion."""
     w, h = resolution
-    pw, ph = int(round(TRUNCATION_PAD * w)), int(round(TRUNCATION_PAD * h))
     K = np.asarray(camera.K, np.float64)
-    return (PinholeCamera(float(K[0, 0]), float(K[1, 1]), float(K[0, 2]) + pw, float(K[1, 2]) + ph,
-                          w + 2 * pw, h + 2 * ph, np.asarray(camera.world_from_camera, np.float64)), pw, ph)
+    d = tuple(float(v) for v in camera.distortion)
+    # NOTE: the same lens on a larger canvas (the distortion acts on normalized coordinates, so
+    # the image's own pixels keep their rays): without it, amodal pixels were counted through no
+    # lens against visible ones through the lens (a whole, unoccluded box 0.6 or 1.17 visible). A
+    # lens that folds back inside the padded canvas gets a smaller pad (truncation counted
+    # against less of the object's outside: lower).
+    def make(f: float) -> Tuple[PinholeCamera, int, int]:
+        pw, ph = int(round(f * TRUNCATION_PAD * w)), int(round(f * TRUNCATION_PAD * h))
+        return (PinholeCamera(float(K[0, 0]), float(K[1, 1]), float(K[0, 2]) + pw, float(K[1, 2]) + ph,
+                              w + 2 * pw, h + 2 * ph, np.asarray(camera.world_from_camera, np.float64),
+                              distortion=d), pw, ph)
+
+    for f in ((1.0, 0.5, 0.25) if any(d) else ()):
+        try:
+            return make(f)
+        except SynthgenError:
+            continue
+    return make(0.0 if any(d) else 1.0)
 
 
 def amodal_masks(view: FrameView, camera: PinholeCamera, ks: Sequence[int],

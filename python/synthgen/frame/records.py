@@ -63,8 +63,12 @@ def frame_camera(cam: CameraSpec, resolution: Tuple[int, int], rng: np.random.Ge
     k = cam.intrinsics
     if "fx" in k:
         fx = k["fx"]
-        return PinholeCamera(fx, k.get("fy", fx), k.get("cx", 0.5 * w), k.get("cy", 0.5 * h), w, h, wfc)
-    return PinholeCamera.from_fov(cam.fov_y, w, h, wfc)
+        return PinholeCamera(fx, k.get("fy", fx), k.get("cx", 0.5 * w), k.get("cy", 0.5 * h), w, h, wfc,
+                             distortion=tuple(cam.distortion))
+    c = PinholeCamera.from_fov(cam.fov_y, w, h, wfc)
+    if any(cam.distortion):
+        c = PinholeCamera(c.fx, c.fy, c.cx, c.cy, w, h, wfc, distortion=tuple(cam.distortion))
+    return c
 
 
 def level_frame(camera: PinholeCamera) -> Dict[str, Any]:

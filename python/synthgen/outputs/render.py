@@ -54,17 +54,31 @@ def camera_meta(camera: Any) -> Dict[str, Any]:
         "cy": cy,
         "K": [[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]],
         "world_from_camera": np.asarray(camera.world_from_camera, dtype=np.float64).tolist(),
+        **_distortion_meta(camera),
     }
+
+
+def _distortion_meta(camera: Any) -> Dict[str, Any]:
+    """{"distortion": [k1, k2, p1, p2, k3]} (OpenCV's model; the image is rendered through it)
+    for a camera with lens distortion, else {}."""
+    d = [float(v) for v in (getattr(camera, "distortion", None) or ())]
+    return {"distortion": d} if any(v != 0.0 for v in d) else {}
 
 
 def image_points(camera: Any, world_from_object: np.ndarray, points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     """Image positions (N x 2, continuous pixel coordinates) and camera-space depths (N: z along
     the optical axis, as the depth output) of object-space points (N x 3) of an object placed by
-    ``world_from_object`` (4 x 4), seen by a PinholeCamera."""
+    ``world_from_object`` (4 x 4), seen by a PinholeCamera: through its lens distortion when it
+    has one, as the renderer's rays go (points behind the camera: NaN with a distortion)."""
     p = np.asarray(points, np.float64).reshape(-1, 3)
     cam_from_object = np.linalg.inv(np.asarray(camera.world_from_camera, np.float64)) @ \
         np.asarray(world_from_object, np.float64)
     c = (cam_from_object @ np.c_[p, np.ones(len(p))].T)[:3]
+    if any(float(k) != 0.0 for k in (getattr(camera, "distortion", None) or ())):
+        # NOTE: K alone would put an off-centre point where an undistorted lens draws it (k1 =
+        # -0.3, 676 x 380, fx 338: 44 px off at the image's side): the camera's own projection.
+        world = (np.asarray(world_from_object, np.float64) @ np.c_[p, np.ones(len(p))].T)[:3].T
+        return np.asarray(camera.project_points(world), np.float64), c[2]
     uv = np.asarray(camera.K, np.float64) @ c
     return (uv[:2] / uv[2]).T, c[2]
 

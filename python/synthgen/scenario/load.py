@@ -165,6 +165,27 @@ def _check(spec: Validated, ctx: ValidationContext) -> None:
             ctx.error(o.locs["pixel_height"], "an object that rests_on another cannot also be placed by pixel_height")
     support_of(spec, ctx)
     _check_exposure(spec, ctx)
+    _check_distortion(spec, ctx)
+
+
+def _check_distortion(spec: Validated, ctx: ValidationContext) -> None:
+    """camera k1..k3: not with KITTI's labels (its P2 projects without a lens) nor a photo
+    background (the photo's calibration has its own)."""
+    from .schema import DISTORTION_KEYS
+
+    cam = spec["camera"]
+    given = [k for k in DISTORTION_KEYS if k in cam.given]
+    if not given:
+        return
+    kitti = [k for k in ("kitti", "kitti_calib") if k in spec["outputs"]]
+    if kitti:
+        where = "" if "outputs" in spec.given else " (the default outputs have them: list yours without)"
+        plural = "s" if len(kitti) > 1 else ""
+        ctx.error(cam.locs[given[0]], f"lens distortion with the {' and '.join(kitti)} output{plural}{where}: KITTI's "
+                                      "P2 projects the 3D boxes without a lens, so they would miss the objects")
+    if spec["background"] is not None:
+        ctx.error(cam.locs[given[0]], "lens distortion with a photo background: the photo's calibration gives the "
+                                      "lens (distortion in its calibration file)")
 
 
 def _check_exposure(spec: Validated, ctx: ValidationContext) -> None:

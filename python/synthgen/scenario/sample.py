@@ -19,7 +19,7 @@ from ..schema import distributions as D
 from ..schema.distributions import frame_rng
 from ..schema.plugins import given_params
 from .load import Scenario, support_of
-from .schema import SHAPE_KEYS, exposure_mode
+from .schema import DISTORTION_KEYS, SHAPE_KEYS, exposure_mode
 
 #: The stream of the camera's exposure draws (camera.exposure): its own, so that a randomized
 #: exposure changes no other draw (streams 1-6: layout, camera jitter, render seed, negatives,
@@ -53,6 +53,8 @@ class CameraSpec:
     pose: Mapping[str, Any]
     exposure: Mapping[str, Any] = field(default_factory=lambda: {"mode": "fixed", "key": 0.18, "ev": 0.0,
                                                                  "factor": None})
+    #: OpenCV lens distortion (k1, k2, p1, p2, k3); zeros: none.
+    distortion: Tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 @dataclass
@@ -172,7 +174,8 @@ def sample_frame(sc: Scenario, frame: int) -> FrameSpec:
     return FrameSpec(
         frame=int(frame), seed=sc.seed,
         camera=CameraSpec(fov_y=float(camera["fov_y"]), intrinsics=intrinsics, pose=camera["pose"],
-                          exposure=exposure),
+                          exposure=exposure,
+                          distortion=tuple(float(camera.get(k) or 0.0) for k in DISTORTION_KEYS)),
         lights=[PluginSpec.of(li) for li in lights],
         ground=GroundSpec(enabled=bool(ground["enabled"]), size=None if ground["size"] is None else float(ground["size"]),
                           material=PluginSpec.of(ground["material"])),

@@ -77,8 +77,13 @@ EXPOSURE = Record(
     doc="the camera's exposure of synthetic frames (docs/scenarios.md#exposure); photo backgrounds take the "
         "photo's")
 
-#: The camera plugin's intrinsics (the image size is ``resolution``), a pose and an exposure.
-CAMERA = randomized(settings_record("camera", "pinhole", scenario=True, keys=("fov_y", "fx", "fy", "cx", "cy"),
+#: The pinhole camera's lens distortion coefficients (OpenCV's order).
+DISTORTION_KEYS = ("k1", "k2", "p1", "p2", "k3")
+
+#: The camera plugin's intrinsics and lens distortion (the image size is ``resolution``), a pose and an
+#: exposure.
+CAMERA = randomized(settings_record("camera", "pinhole", scenario=True,
+                                    keys=("fov_y", "fx", "fy", "cx", "cy", *DISTORTION_KEYS),
                                     default=EMPTY, doc="camera")).extend(
     {"pose": Record({"type": Choice(["orbit", "look_at"], "orbit",
                                     doc="orbit: around a target at a distance, elevation and azimuth; look_at: from "
