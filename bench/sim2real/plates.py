@@ -3,12 +3,12 @@ the real plate photos frame them (``../shared/realdata/plates_openalpr/eu``, mea
 :func:`real_stats`; ``bench/sim2real/PLATES.md``).
 
 - :func:`write_plate_scenario` writes a synthgen scenario (YAML): one library car in front of
-  the camera, placed by its box height in pixels (``pixel_height``) so that its plate covers the
-  fraction of the image width the real photos show; seen from behind or in front, a little off
-  axis, from a person's eye height or lower; its plates German (DIN 74069: white with the blue
+  the camera, which is aimed above the plate facing it from the distance at which the plate
+  covers the fraction of the image width the real photos show; seen from behind or in front, a
+  little off axis, from a person's eye height or lower; its plates German (DIN 74069: white with the blue
   EU band, the style of the real EU photos) unless ``countries`` says otherwise, every visible
   plate labelled as class ``plate`` (COCO: its exact visible mask), the car as ``car``. Around
-  it: 0-2 cars further back (their plates labelled too), a wall or hedge behind, a textured
+  it: a car further back (its plates labelled too), walls or hedges behind, a textured
   ground, a physical sky or an HDR environment, paint from the palette of real cars, dirt.
 - :func:`real_stats` / :func:`coco_plate_stats`: the plate boxes of a real OpenALPR folder and of
   a rendered synthgen dataset, as the same statistics.
@@ -46,6 +46,12 @@ VEHICLES = {"painted": ("mesh/sumo-car-normal-citrus", "mesh/sumo-car-normal-cit
                         "mesh/sumo-car-minibus-citrus", "mesh/sumo-car-microcargo-citrus"),
             "textured": ("mesh/torcs-p406", "mesh/torcs-p406", "mesh/torcs-baja-bug", "mesh/torcs-155-DTM")}
 
+#: Distance of a library vehicle's plates from its centre along its axis, metres: the mean of
+#: its vehicles' (measured: a plate's width in pixels, from its labelled corners, at 8 m, yaw 0
+#: and 180): SUMO car 1.80 / 1.82 (rear / front), minibus 2.14 / 2.17, micro van 1.81 / 1.82;
+#: TORCS Peugeot 406 2.30 / 2.31, Beetle 1.87 / 1.90, Alfa 155 2.16 / 2.29 (PLATES.md).
+PLATE_OFFSET = 2.0
+
 #: HDR environments of the asset library used as light and background beside the physical sky.
 HDRS = ("hdr/city", "hdr/forest", "hdr/sunrise")
 
@@ -61,11 +67,17 @@ def _asphalt() -> Dict[str, Any]:
         "factor": 1.0}}}
 
 
+#: Colours of walls, fences and hedges behind the parked cars of the real photos: white and
+#: beige render, grey concrete, brick, a dark hedge, yellow and blue plaster.
+WALL_COLOURS = ([0.75, 0.74, 0.70], [0.62, 0.55, 0.42], [0.40, 0.40, 0.38], [0.25, 0.25, 0.25],
+                [0.45, 0.20, 0.13], [0.10, 0.18, 0.07], [0.70, 0.58, 0.25], [0.15, 0.30, 0.55])
+
+
 def _wall() -> Dict[str, Any]:
-    """A wall, fence or hedge behind the car: a colour of random hue and lightness with noise."""
+    """A wall, fence or hedge behind the car: one of :data:`WALL_COLOURS` with noise."""
     return {"type": "diffuse", "albedo": {"texture": {
         "type": "blend", "op": "multiply",
-        "a": {"uniform": [[0.05, 0.05, 0.05], [0.8, 0.8, 0.8]]},
+        "a": {"choice": [list(c) for c in WALL_COLOURS]},
         "b": {"texture": {"type": "noise", "mapping": "world", "scale": {"uniform": [0.5, 8]},
                           "octaves": 5, "remap": [-1, 1],
                           "ramp_positions": [0, 1], "ramp_colors": [0.5, 0.5, 0.5, 1.4, 1.4, 1.4]}},
@@ -74,14 +86,15 @@ def _wall() -> Dict[str, Any]:
 
 def write_plate_scenario(path: str, *, seed: int, count: int, spp: int = 16, vehicles: str = "painted",
                          resolution: Sequence[int] = RESOLUTION, countries: Sequence[str] = ("de",),
-                         distance: Sequence[float] = (3.8, 5.8), background_cars: bool = True,
+                         distance: Sequence[float] = (1.4, 2.9), background_cars: bool = True,
                          hdr: bool = True, wear: bool = True, paint: bool = True,
                          outputs: Sequence[str] = ("rgb", "coco")) -> Dict[str, Any]:
     """Write the plate scenario to ``path`` (YAML) and return it as a dict.
 
     ``vehicles``: ``painted`` or ``textured`` (:data:`VEHICLES`: render both for the whole
-    library); ``distance``: the camera's distance from the car's centre, metres (its plate is
-    about half the car's length, 1.8 to 2.4 m, nearer); ``countries``: plate styles
+    library); ``distance``: the camera's distance from the plate it faces, metres (at
+    :data:`PLATE_OFFSET` from the car's centre, the vehicles' own within 0.3 m of it);
+    ``countries``: plate styles
     (``synthgen.scene.plates.COUNTRIES``); ``background_cars``, ``hdr``, ``wear``, ``paint``:
     the ablation switches (further cars, HDR environments beside the sky, dirt, the paint
     palette)."""
@@ -92,15 +105,17 @@ def write_plate_scenario(path: str, *, seed: int, count: int, spp: int = 16, veh
     w, h = int(resolution[0]), int(resolution[1])
     country: Any = countries[0] if len(countries) == 1 else {"choice": list(countries)}
     plates = {"country": country, "class": "plate", "front": True}
-    dirt = {"dirt": {"probability": 0.5, "amount": {"uniform": [0.05, 0.3]}}} if wear else None
+    dirt = {"dirt": {"probability": 0.4, "amount": {"uniform": [0.02, 0.08]}}} if wear else None
     # NOTE: the camera sits on the -x side of the car (at the origin) looking along +x at a
-    # point 0.6 m above the ground near its centre (orbit azimuth 270, the target jittered by up to
-    # 0.3 m): a car of yaw 0 shows its rear, of yaw 180 its front. At 3.8 to 5.8 m from the
-    # centre the plate is 1.4 to 4 m away: a 520 mm plate covers 0.52 / (d 2 tan(fov_x / 2)) of
-    # the image width, 0.09 to 0.36 at fov_y 36 to 48 degrees (fov_x 47 to 61 at 4:3), the
-    # real photos' 0.10 to 0.30 (p0 to p90). Its height above the ground is 0.6 m + distance x
-    # sin(elevation), 0.8 to 2.1 m (a crouching to a standing photographer); the view is off
-    # axis by the car's yaw (sd 12 degrees) and the orbit's azimuth (sd 6).
+    # point 0.9 m high above the plate that faces it (orbit azimuth 270, target at x =
+    # -PLATE_OFFSET, jittered by up to 0.3 m): a car of yaw 0 shows its rear, of yaw 180 its
+    # front (the library's plates stand as far in front of the centre as behind it), the plate
+    # (0.36 to 0.72 m high) below the image centre as in the real photos. A 520 mm plate d
+    # metres away covers 0.52 / (d 2 tan(fov_x / 2)) of the image width: fov_y 36 to 48 degrees
+    # (fov_x 47 to 61 at 4:3) and d 1.4 to 2.9 m give 0.15 to 0.43 (median about 0.24), the
+    # real photos' 0.15 to 0.30 (p10 to p90, median 0.23) and a margin. The camera's height is
+    # 0.9 m + d sin(elevation): 1.1 to 2.3 m (a crouching to a standing photographer); the
+    # view is off axis by the car's yaw (sd 12 degrees) and the orbit's azimuth (sd 6).
     main: Dict[str, Any] = {
         "class": "car", "name": "car", "count": 1,
         "asset": {"choice": fleet},
@@ -113,16 +128,19 @@ def write_plate_scenario(path: str, *, seed: int, count: int, spp: int = 16, veh
         main["wear"] = dirt
     objects: List[Dict[str, Any]] = [main]
     if background_cars:
-        back = {"class": "car", "name": "parked", "count": {"choice": [0, 0, 1, 2]},
+        # NOTE: one, always: a count that varies from frame to frame (0, 1 or 2 parked cars)
+        # makes frames fail with "texture N is still used by material M" (a synthgen bug in
+        # re-using a vehicle's slot, PLATES.md); spread over 18 m across, it is often out of view.
+        back = {"class": "car", "name": "parked", "count": 1,
                 "asset": {"choice": fleet},
                 "yaw": {"choice": [{"normal": [0, 20]}, {"normal": [180, 20]}, {"uniform": [0, 360]}]},
-                "region": [5, -6, 10, 6], "plates": plates, "min_visible_fraction": 0.0, "min_pixels": 0}
+                "region": [5, -9, 6.5, 9], "plates": plates, "min_visible_fraction": 0.0, "min_pixels": 0}
         if paint:
             back["paint"] = {"palette": "cars"}
         objects.append(back)
-    objects.append({"label": False, "name": "wall", "count": {"int": [0, 4]}, "primitive": "box",
-                    "size": {"uniform": [[0.2, 1.0, 3], [1.0, 4.0, 6]]},
-                    "yaw": {"normal": [0, 10]}, "region": [12, -10, 16, 10], "material": _wall(),
+    objects.append({"label": False, "name": "wall", "count": {"int": [1, 5]}, "primitive": "box",
+                    "size": {"uniform": [[0.2, 1.0, 2], [1.0, 4.0, 4]]},
+                    "yaw": {"normal": [0, 10]}, "region": [10, -8, 12, 8], "material": _wall(),
                     "min_visible_fraction": 0.0, "min_pixels": 0})
     sky = [{"type": "sky", "elevation": {"uniform": [10, 70]}, "azimuth": {"uniform": [0, 360]},
             "turbidity": {"uniform": [2, 6]}, "strength": 0.02}]
@@ -138,9 +156,9 @@ def write_plate_scenario(path: str, *, seed: int, count: int, spp: int = 16, veh
                        "photos frame them (bench/sim2real/plates.py)",
         "seed": int(seed), "count": int(count), "resolution": [w, h],
         "camera": {"fov_y": {"uniform": [36, 48]},
-                   "pose": {"type": "orbit", "target": [0, 0.6, 0], "jitter": 0.3,
+                   "pose": {"type": "orbit", "target": [-PLATE_OFFSET, 0.9, 0], "jitter": 0.3,
                             "distance": {"uniform": [float(distance[0]), float(distance[1])]},
-                            "elevation": {"uniform": [3, 15]}, "azimuth": {"normal": [270, 6]}},
+                            "elevation": {"uniform": [8, 28]}, "azimuth": {"normal": [270, 6]}},
                    "exposure": {"mode": "auto", "ev": {"normal": [0, 0.3]}}},
         "lights": {"choice": setups},
         "ground": {"material": _asphalt()},
@@ -157,7 +175,8 @@ def write_plate_scenario(path: str, *, seed: int, count: int, spp: int = 16, veh
     return scenario
 
 
-def _stats(w: np.ndarray, h: np.ndarray, W: np.ndarray, H: np.ndarray, cx: np.ndarray, cy: np.ndarray) -> Dict[str, np.ndarray]:
+def _stats(w: np.ndarray, h: np.ndarray, W: np.ndarray, H: np.ndarray, cx: np.ndarray,
+           cy: np.ndarray) -> Dict[str, np.ndarray]:
     return {"plate_w_px": w, "plate_h_px": h, "plate_w_frac": w / W, "aspect": w / h,
             "centre_x_frac": cx / W, "centre_y_frac": cy / H}
 
@@ -176,8 +195,9 @@ def real_stats(folder: str) -> Dict[str, np.ndarray]:
     return _stats(*a.T)
 
 
-def coco_plate_stats(dataset: str, cls: str = "plate") -> Dict[str, np.ndarray]:
-    """The ``cls`` boxes of a rendered synthgen dataset (``annotations/coco.json``)."""
+def coco_plate_stats(dataset: str, cls: str = "plate", parent: Optional[int] = None) -> Dict[str, np.ndarray]:
+    """The ``cls`` boxes of a rendered synthgen dataset (``annotations/coco.json``); with
+    ``parent``, only those of that instance (1: the scenario's main car, its first object)."""
     with open(os.path.join(dataset, "annotations", "coco.json")) as f:
         coco = json.load(f)
     cat = {c["id"]: c["name"] for c in coco["categories"]}
@@ -185,6 +205,8 @@ def coco_plate_stats(dataset: str, cls: str = "plate") -> Dict[str, np.ndarray]:
     rows = []
     for a in coco["annotations"]:
         if cat[a["category_id"]] != cls or a.get("iscrowd", 0):
+            continue
+        if parent is not None and a.get("parent_instance_id") != parent:
             continue
         x, y, w, h = a["bbox"]
         W, H = size[a["image_id"]]
@@ -206,7 +228,8 @@ def side_by_side(real: str, datasets: Sequence[str], out_png: str, n: int = 12, 
     """Real photos (top rows, their plate box in red) beside rendered frames (bottom rows, their
     labelled plate boxes in green) in one PNG."""
     from PIL import Image, ImageDraw
-    reals = sorted(glob.glob(os.path.join(real, "*.jpg")))[:: max(1, len(glob.glob(os.path.join(real, "*.jpg"))) // n)][:n]
+    every = sorted(glob.glob(os.path.join(real, "*.jpg")))
+    reals = every[:: max(1, len(every) // n)][:n]
     synth = []   # (image path, [(class, bbox)])
     for d in datasets:
         with open(os.path.join(d, "annotations", "coco.json")) as f:
@@ -243,17 +266,17 @@ def side_by_side(real: str, datasets: Sequence[str], out_png: str, n: int = 12, 
 
 def render(scenario: str, out: str, threads: int = 0, tries: int = 3) -> Dict[str, float]:
     """``synthgen run`` the scenario into ``out``, then ``--resume`` it while frames failed (at most
-    ``tries`` runs). NOTE: frames fail now and then with "texture N is still used by material M"
-    when walls and parked cars vary from frame to frame (a scene-update bug of synthgen, reported;
-    the frame's replay and a resumed run in a fresh process render it). Returns wall and child CPU
-    seconds; raises when frames are still missing after ``tries`` runs."""
+    ``tries`` runs; exit status 3, every frame written with some clutter dropped, is a success:
+    the run lists them). NOTE: the resume is a guard against "texture N is still used by
+    material M" (a synthgen bug, PLATES.md; a resumed run in a fresh process renders the frame).
+    Returns wall and child CPU seconds; raises when frames are still missing after ``tries``."""
     t0, c0 = time.time(), os.times()
     for k in range(tries):
         cmd = [sys.executable, "-m", "synthgen", "run", scenario, "-o", out] + (["--resume"] if k else [])
         if threads:
             cmd += ["--threads", str(threads)]
         r = subprocess.run(cmd)
-        if r.returncode == 0:
+        if r.returncode in (0, 3):
             break
     else:
         raise SystemExit(f"{out}: frames still failing after {tries} runs")
@@ -276,6 +299,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     os.makedirs(a.out, exist_ok=True)
     wall = cpu = 0.0
     stats: Dict[str, List[np.ndarray]] = {}
+    main_stats: Dict[str, List[np.ndarray]] = {}
     for k, kind in enumerate(VEHICLES):
         n = a.count // 2 + (a.count % 2 if k == 0 else 0)
         scen = os.path.join(a.out, kind + ".yaml")
@@ -284,10 +308,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         wall, cpu = wall + t["wall"], cpu + t["cpu"]
         for key, v in coco_plate_stats(os.path.join(a.out, kind)).items():
             stats.setdefault(key, []).append(v)
+        for key, v in coco_plate_stats(os.path.join(a.out, kind), parent=1).items():
+            main_stats.setdefault(key, []).append(v)
     print(f"frames={a.count} seconds_per_frame={wall / a.count:.2f} cpu_seconds_per_frame={cpu / a.count:.2f}")
     if os.path.isdir(a.real):
         print_stats("real " + os.path.normpath(a.real), real_stats(a.real))
-    print_stats("synthgen " + a.out, {key: np.concatenate(v) for key, v in stats.items()})
+    print_stats("synthgen " + a.out + ", the main car's plate",
+                {key: np.concatenate(v) for key, v in main_stats.items()})
+    print_stats("synthgen " + a.out + ", every plate", {key: np.concatenate(v) for key, v in stats.items()})
     if os.path.isdir(a.real):
         png = os.path.join(a.out, "vs_real.png")
         side_by_side(a.real, [os.path.join(a.out, kind) for kind in VEHICLES], png, n=a.count)

@@ -1,8 +1,9 @@
 """bench/sim2real/plates.py: the plate scenario of ``sim2real_plate_ap50`` validates for both
 vehicle kinds with the classes car and plate, and a tiny render labels the main car's plate:
 one plate box per frame, inside its car's box (its ``parent_instance_id``), of a DIN 74069
-plate's aspect (520 x 110 mm: 4.73, less when turned) and covering the fraction
-of the image width the real EU photos show (0.10 to 0.30 from p0 to p90, measured: PLATES.md)."""
+plate's aspect (520 x 110 mm: 4.73, less when turned) and covering 0.1 to 0.6 of the image
+width (the scenario's 0.15 to 0.43, the vehicles' plates up to 0.3 m off PLATE_OFFSET; the real
+EU photos: 0.15 to 0.30 from p10 to p90, PLATES.md), not high in the image."""
 import json
 import os
 import sys
@@ -61,6 +62,8 @@ def test_a_tiny_render_labels_the_plate_inside_its_car(tmp_path):
         # A plate turned by yaw (or seen from above) has a box narrower for its height than the
         # plate: at most its 4.73 (a pixel of rounding either way), at least 3 (turned 40 degrees).
         assert 3.0 <= bw / bh and (bw - 1) / (bh + 1) <= 520 / 110, (bw, bh)
-        assert 0.08 <= bw / w <= 0.40, bw            # the real photos' framing, a margin either side
+        assert 0.1 <= bw / w <= 0.6, bw              # the real photos' framing, a margin either side
         assert 0.2 * w <= x + bw / 2 <= 0.8 * w      # seen from behind or in front, near the middle
-        assert pl[0]["area"] > 0.6 * bw * bh         # its visible mask fills its box
+        # The camera aims 0.9 m high, above the plates (0.36 to 0.72 m), jittered 0.3 m.
+        assert y + bh / 2 >= 0.35 * h
+        assert pl[0]["area"] > 0.5 * bw * bh         # its visible mask fills its box (a turned plate: less)
