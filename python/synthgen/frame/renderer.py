@@ -99,6 +99,7 @@ class FrameRenderer:
         #: condition: every instance is hidden before the frame's conditions apply.
         self.weather_pools: Dict[str, Pool] = {}
         self.slots: List[int] = []        # material slot k of object k, updated in place
+        self._slots_set: Set[int] = set()  # the slots set this frame (_set_objects)
         self.library = FrameLibrary(self.scene)   # this frame's generated textures and materials
         self.lights: List[int] = []
         self.ground: Optional[int] = None
@@ -466,6 +467,7 @@ class FrameRenderer:
         while len(self.slots) <= k:
             self.slots.append(self.scene.add_material("diffuse", {}))
         self.scene.update_material(self.slots[k], m.type, realize(self.library, m.params))
+        self._slots_set.add(k)
         return self.slots[k]
 
     def _set_objects(self, spec: FrameSpec) -> List[PlacedObject]:
@@ -476,18 +478,21 @@ class FrameRenderer:
             self.scene.set_instance_visible(inst, False)
             self.scene.set_instance_material(inst, -1)
             self._set_material_map(inst, {})
-        # Material slots no object uses this frame let go of last frame's textures.
-        used = {o.index for o in spec.objects}
-        for k, slot in enumerate(self.slots):
-            if k not in used:
-                self.scene.update_material(slot, "diffuse", {})
         objects = []
         n_decor = 0
+        self._slots_set = set()
         for o in spec.objects:
             placed = self._set_object(spec, o)
             if placed.post_height is not None:
                 placed.decor, n_decor = n_decor, n_decor + 1
             objects.append(placed)
+        # Material slots not set this frame let go of last frame's textures (before the caller
+        # releases them): those of indices no object has, and those of objects that keep their
+        # own materials (a library vehicle at an index a textured box had last frame, when an
+        # entry's count changes).
+        for k, slot in enumerate(self.slots):
+            if k not in self._slots_set:
+                self.scene.update_material(slot, "diffuse", {})
         pole_mesh = self.shapes.get("primitive", "box").mesh_id
         if self.pole_material is None:
             self.pole_material = self.scene.add_material("conductor", {"metal": "iron", "roughness": 0.5})
