@@ -128,10 +128,8 @@ def write_plate_scenario(path: str, *, seed: int, count: int, spp: int = 16, veh
         main["wear"] = dirt
     objects: List[Dict[str, Any]] = [main]
     if background_cars:
-        # NOTE: one, always: a count that varies from frame to frame (0, 1 or 2 parked cars)
-        # makes frames fail with "texture N is still used by material M" (a synthgen bug in
-        # re-using a vehicle's slot, PLATES.md); spread over 18 m across, it is often out of view.
-        back = {"class": "car", "name": "parked", "count": 1,
+        # Half the frames without one: other vehicles are in 14 of the 54 real photos.
+        back = {"class": "car", "name": "parked", "count": {"choice": [0, 1]},
                 "asset": {"choice": fleet},
                 "yaw": {"choice": [{"normal": [0, 20]}, {"normal": [180, 20]}, {"uniform": [0, 360]}]},
                 "region": [5, -9, 6.5, 9], "plates": plates, "min_visible_fraction": 0.0, "min_pixels": 0}
@@ -267,8 +265,9 @@ def side_by_side(real: str, datasets: Sequence[str], out_png: str, n: int = 12, 
 def render(scenario: str, out: str, threads: int = 0, tries: int = 3) -> Dict[str, float]:
     """``synthgen run`` the scenario into ``out``, then ``--resume`` it while frames failed (at most
     ``tries`` runs; exit status 3, every frame written with some clutter dropped, is a success:
-    the run lists them). NOTE: the resume is a guard against "texture N is still used by
-    material M" (a synthgen bug, PLATES.md; a resumed run in a fresh process renders the frame).
+    the run lists them). NOTE: the resume is a guard against frames that fail in a long-lived
+    worker and render in a fresh one ("texture N is still used by material M" was one, fixed:
+    PLATES.md).
     Returns wall and child CPU seconds; raises when frames are still missing after ``tries``."""
     t0, c0 = time.time(), os.times()
     for k in range(tries):
