@@ -281,7 +281,7 @@ def test_coco_and_csv_files_of_many_images(tmp_path):
     c.mkdir()
     os.symlink(tmp_path / "images", c / "images")
     (c / "boxes.csv").write_text("image_id,xmin,ymin,xmax,ymax\nb.jpg,1,2,3,4\na.jpg,5,6,7,8\nb.jpg,9,10,11,12\n")
-    with pytest.raises(sg.SynthgenError, match=r"boxes.csv:2: the row has no class .*\(default_class\)"):
+    with pytest.raises(sg.SynthgenError, match=r"boxes.csv:2: the row has no class .*--default-class NAME; default_class in Python"):
         D.read_real(str(c))
     s = D.read_real(str(c), default_class="car")
     assert [(os.path.basename(x.image), x.boxes.tolist(), x.where) for x in s] == [

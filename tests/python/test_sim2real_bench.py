@@ -1,0 +1,145 @@
+"""bench/sim2real.py's machinery (not its figures): the test/dev split keeps every training frame
+200 frames from every test frame, K-frame draws are contiguous blocks, the staging for the
+accelerator rewrites every path into one folder, the accelerator's runner trains with a
+stand-in for synthgen's compiled core (the machine has none), and the report prints every key
+of issue 34 even where an experiment has no model yet."""
+from __future__ import annotations
+
+import glob
+import importlib.util
+import io
+import json
+import os
+import subprocess
+import sys
+from contextlib import redirect_stdout
+
+import numpy as np
+import pytest
+
+REPO = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+BENCH = os.path.join(REPO, "bench")
+HIGHWAY = os.path.abspath(os.path.join(REPO, "..", "shared", "realdata", "cars_highway"))
+sys.path.insert(0, BENCH)
+
+from sim2real import splits, stage  # noqa: E402
+
+needs_shared = pytest.mark.skipif(not os.path.isdir(HIGHWAY), reason="../shared/realdata is not here")
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("sim2real_bench", os.path.join(BENCH, "sim2real.py"))
+    m = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(m)
+    return m
+
+
+@needs_shared
+def test_split_keeps_training_frames_away_from_the_test_blocks():
+    labelled = sorted(glob.glob(os.path.join(HIGHWAY, "images", "*.jpg")))
+    negatives = sorted(glob.glob(os.path.join(HIGHWAY, "negatives", "*.jpg")))
+    s = splits.split(labelled, negatives)
+    n = splits.frame_number
+    test = [n(p) for p in s["test"]]
+    assert test and all(splits.in_blocks(t, splits.TEST_BLOCKS) for t in test)
+    for key in ("dev", "backgrounds", "recipe_train", "recipe_val"):
+        assert s[key], key
+        assert min(abs(n(p) - t) for p in s[key] for t in test) >= splits.GAP, key
+    assert min(abs(n(a) - n(b)) for a in s["recipe_train"] for b in s["recipe_val"]) >= splits.GAP
+    # every frame is in exactly one of test, dev, backgrounds, unused
+    parts = s["test"] + s["dev"] + s["backgrounds"] + s["unused"]
+    assert sorted(parts) == sorted(labelled + negatives)
+
+
+def test_contiguous_draws():
+    b = _bench()
+
+    class S:
+        def __init__(self, k):
+            self.image = f"/x/vid_4_{k}.jpg"
+
+    dev = [S(k) for k in range(0, 2000, 20)]   # 100 frames
+    rng = np.random.default_rng(0)
+    pick = b.contiguous_draw(dev, 25, rng)
+    assert len(pick) == 25 and len({p.image for p in pick}) == 25
+    order = [p.image for p in sorted(dev, key=lambda s: splits.frame_number(s.image))]
+    idx = sorted(order.index(p.image) for p in pick)
+    blocks = [idx[i:i + 5] for i in range(0, 25, 5)]
+    assert all(bl == list(range(bl[0], bl[0] + 5)) and bl[0] % 5 == 0 for bl in blocks)
+    assert [p.image for p in b.contiguous_draw(dev, 25, np.random.default_rng(0))] == [p.image for p in pick]
+
+
+def _tiny_images(tmp_path, n=2):
+    from PIL import Image
+
+    paths = []
+    for i in range(n):
+        a = np.zeros((64, 96, 3), np.uint8)
+        a[10:40, 20:60] = (200, 50, 50)
+        p = tmp_path / f"img{i}.png"
+        Image.fromarray(a).save(p)
+        paths.append(str(p))
+    return paths
+
+
+def test_stage_rewrites_every_path(tmp_path):
+    imgs = _tiny_images(tmp_path)
+    jobs = [{"name": "a", "classes": ["car"], "mix": None, "options": {"steps": 1, "batch": 1},
+             "pools": {"synthetic": [[p, [[20, 10, 60, 40]], ["car"], [False]] for p in imgs]}}]
+    out = str(tmp_path / ".device")
+    stage.stage(jobs, out)
+    staged = json.load(open(os.path.join(out, "jobs.json")))["jobs"]
+    for r in staged[0]["pools"]["synthetic"]:
+        assert not os.path.isabs(r[0]) and os.path.isfile(os.path.join(out, "data", r[0]))
+    assert os.path.isfile(os.path.join(out, "code", "bench", "sim2real", "remote.py"))
+    assert os.path.isfile(os.path.join(out, "code", "python", "synthgen", "evaluate", "train.py"))
+    old = stage.LIMIT
+    stage.LIMIT = 10
+    try:
+        with pytest.raises(SystemExit, match="stage fewer jobs"):
+            stage.stage(jobs, out)
+    finally:
+        stage.LIMIT = old
+
+
+def test_remote_trains_with_the_core_stand_in(tmp_path):
+    pytest.importorskip("torch")
+    imgs = _tiny_images(tmp_path)
+    jobs = {"jobs": [{"name": "tiny", "classes": ["car"], "mix": None,
+                      "options": {"steps": 2, "batch": 1, "size": [64, 96], "warmup": 1},
+                      "pools": {"synthetic": [[os.path.basename(p), [[20, 10, 60, 40]], ["car"], [False]]
+                                              for p in imgs]},
+                      "test": [[os.path.basename(imgs[0]), [[20, 10, 60, 40]], ["car"], [False]]]}]}
+    jf = tmp_path / "jobs.json"
+    jf.write_text(json.dumps(jobs))
+    out = tmp_path / "out"
+    out.mkdir()
+    probe = ("import sys; sys.argv[0] = ''; sys.path.insert(0, %r); from sim2real import remote; "
+             "remote._import_evaluate(); import synthgen._core as c; print(hasattr(c, 'read_image_info'))" % BENCH)
+    env = dict(os.environ, SYNTHGEN_REMOTE_STANDIN="1")
+    r = subprocess.run([sys.executable, "-c", probe], env=env, capture_output=True, text=True)
+    assert r.stdout.strip() == "False", r.stderr      # the stand-in, not the compiled core
+    r = subprocess.run([sys.executable, os.path.join(BENCH, "sim2real", "remote.py"), str(jf), "--root", str(tmp_path),
+                        "--out", str(out), "--device", "cpu", "--workers", "0"], env=env, capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    res = json.load(open(out / "results.json"))
+    assert res["tiny"]["manifest"]["pools"]["synthetic"]["samples"] == 2
+    assert "car/all" in res["tiny"]["scores"]
+    assert os.path.isfile(out / "tiny.model")
+
+
+@needs_shared
+def test_report_prints_every_key_of_the_issue(tmp_path):
+    b = _bench()
+    buf = io.StringIO()
+    with redirect_stdout(buf):
+        b.report("small", str(tmp_path), {}, 1.0)
+    keys = {line.split("=")[0] for line in buf.getvalue().splitlines()}
+    want = {"sim2real_car_ap50", "sim2real_car_ap50_pure", "paste_control_ap50", "real_trained_ap50",
+            "augment_gain_ap50_at_10", "augment_gain_ap50_at_25", "augment_gain_ap50_at_50",
+            "augment_gain_ap50_all_dev", "sim2real_plate_ap50", "sim2real_plate_ap50_us"}
+    want |= {f"ablation_{n}_ap50" for n in ["no_wear", "no_shadow_catcher", "no_camera_match", "no_denoise",
+                                            "plain_light", "one_paint", "one_car", "spp4", "spp16", "spp64"]}
+    want |= {f"ablation_{n}_render_cpu_s" for n in ["base", "spp4", "spp64"]}
+    assert want <= keys, sorted(want - keys)
