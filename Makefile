@@ -9,7 +9,7 @@ APT_PACKAGES := cmake gcc g++ make pkg-config libembree-dev libopenimageio-dev p
   libpugixml-dev libeigen3-dev libssl-dev pybind11-dev libassimp-dev libtbb-dev libgtest-dev libopenvdb-dev \
   python3-dev python3-venv python3-pip python3-setuptools python3-wheel python3-numpy \
   python3-yaml python3-pytest python3-tqdm python3-distributed python3-matplotlib assimp-testmodels blender-data \
-  fonts-dejavu-core tesseract-ocr python3-torch python3-torchvision
+  fonts-dejavu-core tesseract-ocr python3-torch python3-torchvision python3-pil python3-scipy
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: demo test build deps venv install clean cpp-test py-test

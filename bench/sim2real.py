@@ -16,7 +16,7 @@ the K frames alone; mean and sd over draws), ``sim2real_plate_ap50`` (EU plates;
 style never shown), and ``ablation_NAME_ap50`` beside ``ablation_NAME_render_cpu_s`` (inserted
 frames only, one knob changed, seeds averaged).
 
-Splits (bench/sim2real/splits.py): the test frames are fixed frame-number blocks; nothing within
+One run at a time per cache (two would render into the same folders). Splits (bench/sim2real/splits.py): the test frames are fixed frame-number blocks; nothing within
 200 frames of them trains. Renders are cached under ``--cache`` (default bench/.cache/sim2real)
 by their scenario's text, so a run continues where one stopped.
 
@@ -139,7 +139,9 @@ def _run_cached(cache: str, kind: str, stage: str, n: int) -> str:
     with open(os.path.join(cache, "render.log"), "a") as log:
         r = subprocess.run(["nice", "-n", "10"] + cmd, stdout=log, stderr=subprocess.STDOUT,
                            env=dict(os.environ, PYTHONPATH=os.path.join(REPO, "python")))
-    if r.returncode != 0:
+    # exit status 3: every frame written, some clutter that found no place left out (the
+    # scenario allows drops; the run lists them)
+    if r.returncode not in (0, 3):
         raise SystemExit(f"sim2real: the {kind} render failed (exit status {r.returncode}); see {cache}/render.log")
     return out
 
@@ -196,10 +198,16 @@ def real_sets():
     return {k: [by[p] for p in v] for k, v in sp.items()}, sp
 
 
-def synthgen_samples(dataset: str) -> list:
+def synthgen_samples(dataset: str, n: int, classes=("car",)) -> list:
+    """Frames 0 .. n-1 of a rendered dataset (a cache rendered further for another budget holds
+    more: frame k depends on k alone)."""
     from synthgen.evaluate import datasets
 
-    return list(datasets.read_synthgen(dataset, classes=["car"], mapping={"van": "car", "truck": "car"}))
+    out = [s for s in datasets.read_synthgen(dataset, classes=list(classes))
+           if int(os.path.splitext(os.path.basename(s.image))[0]) < n]
+    if len(out) != n:
+        raise SystemExit(f"sim2real: {dataset} holds {len(out)} of the {n} frames asked for")
+    return out
 
 
 def _row(s) -> list:
@@ -245,8 +253,9 @@ def build_jobs(budget: str, cache: str, render_only: bool = False) -> List[Dict[
     plates_ds = render_plates(cache, b["plates"], seed=0, spp=b["spp"])
     if render_only:
         return []
-    S = {k: synthgen_samples(v) for k, v in [("inserted", inserted), ("paste", paste), ("pure", pure_ds),
-                                              ("augment", augment)]}
+    S = {k: synthgen_samples(v, n) for k, v, n in [("inserted", inserted, b["inserted"]),
+                                                   ("paste", paste, b["inserted"]), ("pure", pure_ds, b["pure"]),
+                                                   ("augment", augment, n_aug)]}
     C = ["car"]
     jobs = [job("car", C, {"synthetic": S["inserted"] + S["pure"]}, None, b),
             job("car_pure", C, {"synthetic": S["pure"]}, None, b),
@@ -267,10 +276,13 @@ def build_jobs(budget: str, cache: str, render_only: bool = False) -> List[Dict[
             jobs.append(job(f"augmented_k{k}_d{d}", C, {"real": pick, "synthetic": syn,
                                                          "negative": real["backgrounds"]}, MIX_AUGMENTED, b, seed=d))
     for (name, seed), ds in abl.items():
-        jobs.append(job(f"ablation_{name}_s{seed}", C, {"synthetic": synthgen_samples(ds)}, None, b, seed=seed))
+        jobs.append(job(f"ablation_{name}_s{seed}", C, {"synthetic": synthgen_samples(ds, b["ablation_frames"])},
+                        None, b, seed=seed))
     from synthgen.evaluate import datasets
 
     ps = [s for ds in plates_ds for s in datasets.read_synthgen(ds, classes=["plate"])]
+    if not ps:
+        raise SystemExit("sim2real: the plate renders hold no frames")
     jobs.append(job("plate", ["plate"], {"synthetic": ps}, None, b))
     with open(os.path.join(cache, f"jobs_{budget}.json"), "w") as f:
         json.dump({"jobs": jobs}, f)

@@ -1,6 +1,6 @@
 """synthgen frames for ``sim2real_plate_ap50`` (issue 34): cars with EU-style plates, framed as
 the real plate photos frame them (``../shared/realdata/plates_openalpr/eu``, measured by
-:func:`real_stats`; ``bench/sim2real/PLATES.md``).
+:func:`real_stats`; docs/sim2real.md, "Plates").
 
 - :func:`write_plate_scenario` writes a synthgen scenario (YAML): one library car in front of
   the camera, which is aimed above the plate facing it from the distance at which the plate
@@ -49,7 +49,7 @@ VEHICLES = {"painted": ("mesh/sumo-car-normal-citrus", "mesh/sumo-car-normal-cit
 #: Distance of a library vehicle's plates from its centre along its axis, metres: the mean of
 #: its vehicles' (measured: a plate's width in pixels, from its labelled corners, at 8 m, yaw 0
 #: and 180): SUMO car 1.80 / 1.82 (rear / front), minibus 2.14 / 2.17, micro van 1.81 / 1.82;
-#: TORCS Peugeot 406 2.30 / 2.31, Beetle 1.87 / 1.90, Alfa 155 2.16 / 2.29 (PLATES.md).
+#: TORCS Peugeot 406 2.30 / 2.31, Beetle 1.87 / 1.90, Alfa 155 2.16 / 2.29 (docs/sim2real.md, "Plates").
 PLATE_OFFSET = 2.0
 
 #: HDR environments of the asset library used as light and background beside the physical sky.
@@ -267,7 +267,7 @@ def render(scenario: str, out: str, threads: int = 0, tries: int = 3) -> Dict[st
     ``tries`` runs; exit status 3, every frame written with some clutter dropped, is a success:
     the run lists them). NOTE: the resume is a guard against frames that fail in a long-lived
     worker and render in a fresh one ("texture N is still used by material M" was one, fixed:
-    PLATES.md).
+    docs/sim2real.md, "Plates").
     Returns wall and child CPU seconds; raises when frames are still missing after ``tries``."""
     t0, c0 = time.time(), os.times()
     for k in range(tries):

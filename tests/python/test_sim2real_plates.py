@@ -3,7 +3,7 @@ vehicle kinds with the classes car and plate, and a tiny render labels the main 
 one plate box per frame, inside its car's box (its ``parent_instance_id``), of a DIN 74069
 plate's aspect (520 x 110 mm: 4.73, less when turned) and covering 0.1 to 0.6 of the image
 width (the scenario's 0.15 to 0.43, the vehicles' plates up to 0.3 m off PLATE_OFFSET; the real
-EU photos: 0.15 to 0.30 from p10 to p90, PLATES.md), not high in the image."""
+EU photos: 0.15 to 0.30 from p10 to p90, docs/sim2real.md, "Plates"), not high in the image."""
 import json
 import os
 import sys
