@@ -90,10 +90,22 @@ class Graph:
         parts = f[len(prefix):-3].split("/")
         return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
+    def _script_file(self, folder: str, module: str) -> Optional[str]:
+        """The file of ``module`` (dotted) among the scripts of ``folder``: a script, or a
+        module or package of a folder of scripts (bench/sim2real/)."""
+        path = f"{folder}/{module.replace('.', '/')}"
+        for cand in (path + ".py", path + "/__init__.py"):
+            if cand in self.trees:
+                return cand
+        return None
+
     def _file(self, module: str, f: str) -> Optional[str]:
         if module in self.modules:
             return self.modules[module]
-        if self.module_of(f) is None:  # a script: its folder's scripts
+        if self.module_of(f) is None:  # a script: its folder's scripts (and their packages)
+            found = self._script_file(os.path.dirname(f), module)
+            if found is not None:
+                return found
             script = f"{os.path.dirname(f)}/{module.split('.')[0]}.py"
             if script in self.trees:
                 return script
@@ -118,6 +130,18 @@ class Graph:
                     ours = a.name.split(".")[0] == top
                     self._add(f, self._file(a.name, f), a.name, f"import {a.name}", ours)
             elif isinstance(node, ast.ImportFrom):
+                if node.level and me is None:  # relative, in a package of scripts (bench/sim2real/)
+                    folder = os.path.dirname(f)
+                    for _ in range(node.level - 1):
+                        folder = os.path.dirname(folder)
+                    what = f"from {'.' * node.level}{node.module or ''} import"
+                    for a in node.names:
+                        sub = f"{node.module}.{a.name}" if node.module else a.name
+                        target = self._script_file(folder, sub)
+                        if target is None and node.module:
+                            target = self._script_file(folder, node.module)
+                        self._add(f, target, a.name, f"{what} {a.name}", True)
+                    continue
                 if node.level:
                     base = (package or "").split(".")
                     base = base[:len(base) - node.level + 1]
@@ -133,6 +157,9 @@ class Graph:
                         self._add(f, self.modules[sub], a.name, f"{what} {a.name}", ours)
                         continue
                     if module in NATIVE or sub in NATIVE:
+                        continue
+                    if me is None and self._script_file(os.path.dirname(f), sub):  # a script package's module
+                        self._add(f, self._script_file(os.path.dirname(f), sub), a.name, f"{what} {a.name}", ours)
                         continue
                     self._add(f, self._file(module, f), a.name, f"{what} {a.name}", ours)
 
@@ -239,6 +266,8 @@ def test_the_graph_sees_the_package(graph):
     assert {"FrameRenderer"} <= graph.edges.get(task_frame, set())
     assert graph.edges.get(("python/synthgen/frame/renderer.py", "python/synthgen/randomize/__init__.py"), set())
     assert graph.edges.get(("bench/scaling.py", "bench/dataset_throughput.py"), set())
+    assert graph.edges.get(("bench/sim2real/data.py", "bench/sim2real/road_regions.py"), set())   # from . import
+    assert graph.edges.get(("bench/sim2real.py", "bench/sim2real/data.py"), set())   # the script and its package
 
 
 def test_no_import_circles(graph):
