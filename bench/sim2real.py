@@ -85,7 +85,8 @@ def say(msg: str) -> None:
 
 
 def _cost(dataset: str) -> Dict[str, float]:
-    """CPU seconds per frame of a render dataset (accumulated over resumed runs in cost.json)."""
+    """CPU seconds per frame of a render dataset, accumulated over its runs in cost.json (called
+    after every run: a later ``--resume`` rewrites run_summary.json)."""
     root = dataset
     while not os.path.isfile(os.path.join(root, "run_summary.json")) and os.path.dirname(root) != root:
         cand = os.path.join(os.path.dirname(root), "data")
@@ -116,8 +117,10 @@ def render_inserted(cache: str, name: str, n: int, frames: Sequence[str], *, see
                     labels_csv: Optional[str] = None, **knobs) -> str:
     say(f"render {name}: {n} frames, spp {spp}, seed {seed} {knobs or ''}")
     with open(os.path.join(cache, "render.log"), "a") as log:
-        return data.render(os.path.join(cache, "inserted"), n, list(frames), seed=seed, spp=spp, labels_csv=labels_csv,
-                           log=log, **knobs)
+        out = data.render(os.path.join(cache, "inserted"), n, list(frames), seed=seed, spp=spp, labels_csv=labels_csv,
+                          log=log, **knobs)
+    _cost(out)   # now: the next --resume of the same render rewrites its summary
+    return out
 
 
 def _run_cached(cache: str, kind: str, stage: str, n: int) -> str:
@@ -143,6 +146,7 @@ def _run_cached(cache: str, kind: str, stage: str, n: int) -> str:
     # scenario allows drops; the run lists them)
     if r.returncode not in (0, 3):
         raise SystemExit(f"sim2real: the {kind} render failed (exit status {r.returncode}); see {cache}/render.log")
+    _cost(out)
     return out
 
 
@@ -388,7 +392,8 @@ def report(budget: str, cache: str, rows: Dict[str, Any], seconds: float) -> Non
     for name in names:
         vals = [rows[f"ablation_{name}_s{s}"].ap50 for s in b["ablation_seeds"] if f"ablation_{name}_s{s}" in rows]
         cs = [costs[f"ablation_{name}_s{s}"] for s in b["ablation_seeds"] if f"ablation_{name}_s{s}" in costs]
-        cpu = sum(c["cpu_s"] for c in cs) / max(1, sum(c["frames"] for c in cs)) if cs else float("nan")
+        frames = sum(c["frames"] for c in cs)
+        cpu = sum(c["cpu_s"] for c in cs) / frames if frames else float("nan")   # nan: not measured
         print(f"ablation_{name}_ap50={_f(float(np.mean(vals))) if vals else 'nan'}")
         print(f"ablation_{name}_ap50_seeds=[{', '.join(_f(v) for v in vals)}]")
         print(f"ablation_{name}_render_cpu_s={_f(cpu)}")
