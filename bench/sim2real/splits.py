@@ -5,7 +5,7 @@ near-duplicates), so the split is by frame number in contiguous blocks, never at
 
 * **test**: the labelled frames in :data:`TEST_BLOCKS` (frame numbers [low, high)) -- 90 of the
   216 labelled frames, 152 cars; every figure of ``bench/sim2real.py`` is scored on them;
-* **dev**: the other labelled frames at least :data:`GAP` frames from every test frame (126
+* **dev**: the other labelled frames at least :data:`GAP` frames from every test frame (124
   frames): the real frames that may train (``real_trained_ap50``, the K-frame draws of
   ``augment_gain_ap50_at_K``);
 * **backgrounds**: the car-free frames (``negatives/``) at least :data:`GAP` frames from every
