@@ -27,12 +27,12 @@ returned models ``--phase report --models DIR`` then scores here.
 from __future__ import annotations
 
 import argparse
+import functools
 import glob
 import hashlib
 import json
 import math
 import os
-import shutil
 import subprocess
 import sys
 import time
@@ -87,13 +87,8 @@ def say(msg: str) -> None:
 def _cost(dataset: str) -> Dict[str, float]:
     """CPU seconds per frame of a render dataset, accumulated over its runs in cost.json (called
     after every run: a later ``--resume`` rewrites run_summary.json)."""
-    root = dataset
-    while not os.path.isfile(os.path.join(root, "run_summary.json")) and os.path.dirname(root) != root:
-        cand = os.path.join(os.path.dirname(root), "data")
-        if os.path.isfile(os.path.join(cand, "run_summary.json")):
-            root = cand
-            break
-        root = os.path.dirname(root)
+    # the render is CACHE/KIND/<hash>/data; a post step's dataset (paste_control, ...) sits beside it
+    root = os.path.join(os.path.dirname(dataset), "data")
     summ = os.path.join(root, "run_summary.json")
     cost = os.path.join(root, "cost.json")
     c = {"frames": 0, "cpu_s": 0.0, "summary_mtime": 0.0}
@@ -192,6 +187,7 @@ def backgrounds_of(dataset: str) -> Dict[str, str]:
 # samples and jobs
 
 
+@functools.lru_cache(maxsize=None)
 def real_sets():
     from synthgen.evaluate import datasets
 

@@ -6,7 +6,6 @@ manifest saved in the model file, and errors. Every test skips without PyTorch; 
 and a few steps only (CI trains here)."""
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from typing import List
 

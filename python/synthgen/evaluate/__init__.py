@@ -20,7 +20,12 @@ imports it) and below ``bench`` and ``cli``. It holds, as issue 34 builds it:
   rule, a photo frame's real objects and ignore regions), real label sets in every format of
   :mod:`synthgen.background.label_files` (format detected, class mapping, drops counted) and
   images without objects, as :class:`.datasets.Sample` records and :mod:`.score` ground truth;
-- later: its training, and ``synthgen evaluate train|score|detect``.
+- :mod:`.augment`, :mod:`.train` -- training: augmentation, pools mixed by fixed shares per
+  batch, the optimisation, the manifest saved in the model file; :func:`.train.detect_samples`;
+- :mod:`.images` -- images read by synthgen's strict reader (Pillow where the core is absent);
+- :mod:`.plots` -- the precision-recall figure of ``synthgen evaluate score``.
+
+The command line is :mod:`synthgen.cli.evaluate` (``synthgen evaluate train|score|detect``).
 
 PyTorch is optional: a module that needs it imports it lazily, inside the functions that use
 it, and a missing torch raises a :class:`synthgen.SynthgenError` naming the Debian packages
