@@ -62,7 +62,7 @@ BUDGETS: Dict[str, Dict[str, Any]] = {
                   test_every=3, bootstrap=200, workers=0),
     # the accelerator for training; renders on the CPU, cached between sessions
     "full": dict(inserted=256, pure=256, spp=16, augment_per_frame=2, augment_spp=16, ks=(10, 25, 50), draws=5,
-                 plates=256, ablation_frames=128, ablation_seeds=(0, 1), spps=(4, 16, 64), steps=3000, batch=32,
+                 plates=256, ablation_frames=128, ablation_seeds=(0, 1), spps=(4, 16, 64), steps=1000, batch=32,
                  test_every=1, bootstrap=1000, workers=8),
 }
 
@@ -231,65 +231,90 @@ def contiguous_draw(dev: list, k: int, rng: np.random.Generator, block: int = 5)
     return picked[:k]
 
 
-def build_jobs(budget: str, cache: str, render_only: bool = False) -> List[Dict[str, Any]]:
+#: Experiment groups (``--groups``): which renders each needs and which jobs it makes.
+GROUPS = ("car", "real", "augment", "ablation", "plate")
+
+
+def build_jobs(budget: str, cache: str, render_only: bool = False,
+               groups: Sequence[str] = GROUPS) -> List[Dict[str, Any]]:
+    """Renders what the ``groups`` need (cached) and returns their training jobs."""
     b = BUDGETS[budget]
     real, _ = real_sets()
     bg = [s.image for s in real["backgrounds"]]
-    inserted = render_inserted(cache, "inserted", b["inserted"], bg, seed=0, spp=b["spp"])
-    paste = render_inserted(cache, "paste", b["inserted"], bg, seed=0, spp=b["spp"], paste_control=True)
-    pure_ds = render_pure(cache, b["pure"], seed=0, spp=b["spp"])
     n_aug = b["augment_per_frame"] * len(real["dev"])
-    augment = render_inserted(cache, "augment", n_aug, [s.image for s in real["dev"]], seed=1, spp=b["augment_spp"],
-                              labels_csv=os.path.join(HIGHWAY, "boxes.csv"))
+    costs: Dict[str, Any] = {}
+    cpath = os.path.join(cache, f"costs_{budget}.json")
+    if os.path.isfile(cpath):
+        with open(cpath) as f:
+            costs = json.load(f)
+    if "car" in groups:
+        inserted = render_inserted(cache, "inserted", b["inserted"], bg, seed=0, spp=b["spp"])
+        paste = render_inserted(cache, "paste", b["inserted"], bg, seed=0, spp=b["spp"], paste_control=True)
+        pure_ds = render_pure(cache, b["pure"], seed=0, spp=b["spp"])
+        costs.update(inserted=_cost(inserted), pure=_cost(pure_ds))
+    if "augment" in groups:
+        augment = render_inserted(cache, "augment", n_aug, [s.image for s in real["dev"]], seed=1,
+                                  spp=b["augment_spp"], labels_csv=os.path.join(HIGHWAY, "boxes.csv"))
+        costs.update(augment=_cost(augment))
     abl = {}
-    for name, knobs in ABLATIONS.items():
-        for seed in b["ablation_seeds"]:
-            abl[(name, seed)] = render_inserted(cache, f"ablation {name}", b["ablation_frames"], bg, seed=100 + seed,
-                                                spp=b["spp"], **knobs)
-    for spp in b["spps"]:
-        for seed in b["ablation_seeds"]:
-            abl[(f"spp{spp}", seed)] = render_inserted(cache, f"ablation spp {spp}", b["ablation_frames"], bg,
-                                                       seed=100 + seed, spp=spp)
-    plates_ds = render_plates(cache, b["plates"], seed=0, spp=b["spp"])
+    if "ablation" in groups:
+        for name, knobs in ABLATIONS.items():
+            for seed in b["ablation_seeds"]:
+                abl[(name, seed)] = render_inserted(cache, f"ablation {name}", b["ablation_frames"], bg,
+                                                    seed=100 + seed, spp=b["spp"], **knobs)
+        for spp in b["spps"]:
+            for seed in b["ablation_seeds"]:
+                abl[(f"spp{spp}", seed)] = render_inserted(cache, f"ablation spp {spp}", b["ablation_frames"], bg,
+                                                           seed=100 + seed, spp=spp)
+        costs.update({f"ablation_{n}_s{s}": _cost(ds) for (n, s), ds in abl.items()})
+    if "plate" in groups:
+        plates_ds = render_plates(cache, b["plates"], seed=0, spp=b["spp"])
+    with open(cpath, "w") as f:
+        json.dump(costs, f)
     if render_only:
         return []
-    S = {k: synthgen_samples(v, n) for k, v, n in [("inserted", inserted, b["inserted"]),
-                                                   ("paste", paste, b["inserted"]), ("pure", pure_ds, b["pure"]),
-                                                   ("augment", augment, n_aug)]}
     C = ["car"]
-    jobs = [job("car", C, {"synthetic": S["inserted"] + S["pure"]}, None, b),
-            job("car_pure", C, {"synthetic": S["pure"]}, None, b),
-            job("paste_control", C, {"synthetic": S["paste"] + S["pure"]}, None, b),
-            job("inserted_only", C, {"synthetic": S["inserted"]}, None, b),
-            job("real_all", C, {"real": real["dev"], "negative": real["backgrounds"]}, MIX_REAL, b)]
-    made_from = backgrounds_of(augment)
+    jobs = []
+    if "car" in groups:
+        S = {k: synthgen_samples(v, b["inserted"] if k != "pure" else b["pure"])
+             for k, v in [("inserted", inserted), ("paste", paste), ("pure", pure_ds)]}
+        jobs += [job("car", C, {"synthetic": S["inserted"] + S["pure"]}, None, b),
+                 job("car_pure", C, {"synthetic": S["pure"]}, None, b),
+                 job("paste_control", C, {"synthetic": S["paste"] + S["pure"]}, None, b),
+                 job("inserted_only", C, {"synthetic": S["inserted"]}, None, b)]
+    if "real" in groups:
+        jobs.append(job("real_all", C, {"real": real["dev"], "negative": real["backgrounds"]}, MIX_REAL, b))
     aug_by_photo: Dict[str, list] = {}
-    for s in S["augment"]:
-        aug_by_photo.setdefault(made_from[s.image], []).append(s)
-    jobs.append(job("augmented_all", C, {"real": real["dev"], "synthetic": S["augment"],
-                                          "negative": real["backgrounds"]}, MIX_AUGMENTED, b))
+    if "augment" in groups:
+        made_from = backgrounds_of(augment)
+        aug = synthgen_samples(augment, n_aug)
+        for s in aug:
+            aug_by_photo.setdefault(made_from[s.image], []).append(s)
+        jobs.append(job("augmented_all", C, {"real": real["dev"], "synthetic": aug,
+                                              "negative": real["backgrounds"]}, MIX_AUGMENTED, b))
     for k in b["ks"]:
         for d in range(b["draws"]):
             pick = contiguous_draw(real["dev"], k, np.random.default_rng([k, d]))
-            syn = [s for p in pick for s in aug_by_photo.get(os.path.realpath(p.image), [])]
-            jobs.append(job(f"real_k{k}_d{d}", C, {"real": pick, "negative": real["backgrounds"]}, MIX_REAL, b, seed=d))
-            jobs.append(job(f"augmented_k{k}_d{d}", C, {"real": pick, "synthetic": syn,
-                                                         "negative": real["backgrounds"]}, MIX_AUGMENTED, b, seed=d))
+            if "real" in groups:
+                jobs.append(job(f"real_k{k}_d{d}", C, {"real": pick, "negative": real["backgrounds"]}, MIX_REAL, b,
+                                seed=d))
+            if "augment" in groups:
+                syn = [s for p in pick for s in aug_by_photo.get(os.path.realpath(p.image), [])]
+                jobs.append(job(f"augmented_k{k}_d{d}", C, {"real": pick, "synthetic": syn,
+                                                             "negative": real["backgrounds"]}, MIX_AUGMENTED, b,
+                                seed=d))
     for (name, seed), ds in abl.items():
         jobs.append(job(f"ablation_{name}_s{seed}", C, {"synthetic": synthgen_samples(ds, b["ablation_frames"])},
                         None, b, seed=seed))
-    from synthgen.evaluate import datasets
+    if "plate" in groups:
+        from synthgen.evaluate import datasets
 
-    ps = [s for ds in plates_ds for s in datasets.read_synthgen(ds, classes=["plate"])]
-    if not ps:
-        raise SystemExit("sim2real: the plate renders hold no frames")
-    jobs.append(job("plate", ["plate"], {"synthetic": ps}, None, b))
+        ps = [s for ds in plates_ds for s in datasets.read_synthgen(ds, classes=["plate"])]
+        if not ps:
+            raise SystemExit("sim2real: the plate renders hold no frames")
+        jobs.append(job("plate", ["plate"], {"synthetic": ps}, None, b))
     with open(os.path.join(cache, f"jobs_{budget}.json"), "w") as f:
         json.dump({"jobs": jobs}, f)
-    costs = {name: _cost(ds) for name, ds in [("inserted", inserted), ("pure", pure_ds), ("augment", augment)]}
-    costs.update({f"ablation_{n}_s{s}": _cost(ds) for (n, s), ds in abl.items()})
-    with open(os.path.join(cache, f"costs_{budget}.json"), "w") as f:
-        json.dump(costs, f)
     return jobs
 
 
@@ -310,6 +335,20 @@ def train_local(jobs: List[Dict[str, Any]], models: str, device: str, workers: i
     remote.main([path, "--root", "/", "--out", models, "--device", device, "--workers", str(workers)])
 
 
+def unpack(models: str) -> None:
+    """Extracts the ``models_K.tar`` files a device call brought back (remote.py ``--pack``)
+    into ``models``; a model already there is left as it is."""
+    import tarfile
+
+    for t in sorted(glob.glob(os.path.join(models, "models_*.tar"))):
+        with tarfile.open(t) as tf:
+            for m in tf.getmembers():
+                if not (m.isfile() and m.name.endswith(".model") and "/" not in m.name):
+                    raise SystemExit(f"sim2real: {t} holds {m.name!r}, not a model file")
+                if not os.path.isfile(os.path.join(models, m.name)):
+                    tf.extract(m, models)
+
+
 def score_models(budget: str, models: str, jobs: List[Dict[str, Any]]) -> Dict[str, Any]:
     from synthgen.evaluate import datasets
     from synthgen.evaluate.detector import Detector
@@ -317,6 +356,7 @@ def score_models(budget: str, models: str, jobs: List[Dict[str, Any]]) -> Dict[s
     from synthgen.evaluate.train import detect_samples
 
     b = BUDGETS[budget]
+    unpack(models)
     real, _ = real_sets()
     test = real["test"][::b["test_every"]]
     gt = datasets.ground_truth(test)
@@ -406,7 +446,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--cache", default=os.path.join(HERE, ".cache", "sim2real"))
     ap.add_argument("--models", default=None, help="trained models (default CACHE/models_BUDGET)")
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--jobs", default="", help="stage: the jobs (names, comma-separated) to stage")
+    ap.add_argument("--jobs", default="", help="stage: the jobs to stage (names or fnmatch patterns, comma-separated)")
+    ap.add_argument("--groups", default=",".join(GROUPS),
+                    help=f"the experiment groups to render, train and score (comma-separated, of {', '.join(GROUPS)})")
+    ap.add_argument("--stage-to", default=os.path.join(REPO, ".device"), help="stage: the folder (git-ignored)")
     a = ap.parse_args(argv)
     if not os.path.isfile(os.path.join(HIGHWAY, "boxes.csv")):
         print("sim2real: ../shared/realdata is not here; nothing to measure", file=sys.stderr)
@@ -415,15 +458,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     os.makedirs(a.cache, exist_ok=True)
     models = a.models or os.path.join(a.cache, f"models_{a.budget}")
     os.makedirs(models, exist_ok=True)
+    groups = [g for g in a.groups.split(",") if g]
+    bad = sorted(set(groups) - set(GROUPS))
+    if bad:
+        ap.error(f"--groups: unknown group(s) {bad} (groups: {', '.join(GROUPS)})")
     if a.phase == "render":
-        build_jobs(a.budget, a.cache, render_only=True)
+        build_jobs(a.budget, a.cache, render_only=True, groups=groups)
         return 0
-    jobs = build_jobs(a.budget, a.cache)
+    jobs = build_jobs(a.budget, a.cache, groups=groups)
     if a.phase == "stage":
+        import fnmatch
+
         from sim2real import stage
 
         names = [n for n in a.jobs.split(",") if n]
-        stage.stage([j for j in jobs if not names or j["name"] in names], os.path.join(REPO, ".device"))
+        stage.stage([j for j in jobs if not names or any(fnmatch.fnmatchcase(j["name"], n) for n in names)],
+                    os.path.abspath(a.stage_to))
         return 0
     if a.phase == "all":
         train_local(jobs, models, a.device, BUDGETS[a.budget]["workers"])

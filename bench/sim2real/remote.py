@@ -10,10 +10,17 @@ A job file (JSON): ``{"jobs": [{"name", "classes", "pools": {POOL: [SAMPLE, ...]
 a SAMPLE ``[image path relative to the root, boxes (x0 y0 x1 y1 px), classes, ignore flags]``.
 
     python3 bench/sim2real/remote.py JOBS.json --root DIR --out DIR [--device cuda] [--workers N]
+        [--parallel P] [--pack MiB]
 
 writes per job ``NAME.model`` and, for all jobs, ``results.json``: per job the scores of its
 test samples (AP50 with its bootstrap interval, AP50:95, R@0.1FPPI, per size bucket), the
 training manifest, the loss curve (every 10th step) and the seconds it took.
+
+``--parallel P`` trains P jobs at a time (each in its own process with ``workers // P`` data
+workers, sharing the one GPU: the small detector leaves the GPU idle while the CPUs augment, so
+P jobs finish in about the time of one). A job's model does not depend on P: its batches depend
+on its seed alone (synthgen.evaluate.train). ``--pack MiB`` then moves the models into tar files
+of at most that size (``models_K.tar``), since a device call brings back only a few files.
 """
 from __future__ import annotations
 
@@ -84,7 +91,12 @@ def main(argv=None) -> int:
     ap.add_argument("--device", default="cuda")
     ap.add_argument("--workers", type=int, default=8)
     ap.add_argument("--only", default="")
+    ap.add_argument("--parallel", type=int, default=1)
+    ap.add_argument("--results", default="results.json")
+    ap.add_argument("--pack", type=float, default=0.0, help="pack the models into tar files of at most this many MiB")
     a = ap.parse_args(argv)
+    if a.parallel > 1:
+        return _parallel(a)
     _import_evaluate()
     from synthgen.evaluate import augment as A
     from synthgen.evaluate import train as T
@@ -94,7 +106,7 @@ def main(argv=None) -> int:
     with open(a.jobs) as f:
         jobs = json.load(f)["jobs"]
     results = {}
-    rpath = os.path.join(a.out, "results.json")
+    rpath = os.path.join(a.out, a.results)
     if os.path.exists(rpath):
         with open(rpath) as f:
             results = json.load(f)
@@ -134,7 +146,75 @@ def main(argv=None) -> int:
                          "loss": [round(l["total"], 4) for l in res.losses[::10]]}
         with open(rpath, "w") as f:
             json.dump(results, f, indent=1)
+    if a.pack:
+        pack(a.out, a.pack)
     return 0
+
+
+def _parallel(a) -> int:
+    """``a.parallel`` processes of this script, the jobs dealt round-robin, their results merged
+    into ``results.json``; a failed process fails the whole run (after the others finish)."""
+    import subprocess
+
+    with open(a.jobs) as f:
+        names = [j["name"] for j in json.load(f)["jobs"]]
+    if a.only:
+        names = [n for n in names if n in a.only.split(",")]
+    procs = []
+    for i in range(a.parallel):
+        mine = names[i::a.parallel]
+        if not mine:
+            continue
+        cmd = [sys.executable, os.path.abspath(__file__), a.jobs, "--root", a.root, "--out", a.out, "--device",
+               a.device, "--workers", str(max(0, a.workers // a.parallel)), "--only", ",".join(mine),
+               "--results", f"results_{i}.json"]
+        procs.append((i, subprocess.Popen(cmd)))
+    failed = [i for i, p in procs if p.wait() != 0]
+    merged = {}
+    rpath = os.path.join(a.out, a.results)
+    if os.path.exists(rpath):
+        with open(rpath) as f:
+            merged = json.load(f)
+    for i, _ in procs:
+        part = os.path.join(a.out, f"results_{i}.json")
+        if os.path.exists(part):
+            with open(part) as f:
+                merged.update(json.load(f))
+            os.remove(part)
+    with open(rpath, "w") as f:
+        json.dump(merged, f, indent=1)
+    if failed:
+        print(f"remote: the process(es) {failed} failed; results.json holds the jobs that finished", file=sys.stderr)
+    if a.pack:
+        pack(a.out, a.pack)
+    return 1 if failed else 0
+
+
+def pack(out: str, mib: float) -> List[str]:
+    """Moves ``out``'s ``*.model`` files into ``models_K.tar`` files of at most ``mib`` MiB each
+    (in name order); returns the tar files."""
+    import tarfile
+
+    models = sorted(f for f in os.listdir(out) if f.endswith(".model"))
+    groups: List[List[str]] = []
+    size = 0.0
+    for m in models:
+        n = os.path.getsize(os.path.join(out, m)) + 1536   # a tar header and padding
+        if not groups or size + n > mib * 2**20 - 10240:   # the end-of-archive blocks
+            groups.append([])
+            size = 0.0
+        groups[-1].append(m)
+        size += n
+    tars = []
+    for k, g in enumerate(groups):
+        t = os.path.join(out, f"models_{k}.tar")
+        with tarfile.open(t, "w") as tf:
+            for m in g:
+                tf.add(os.path.join(out, m), arcname=m)
+        for m in g:
+            os.remove(os.path.join(out, m))
+        tars.append(t)
+    return tars
 
 
 if __name__ == "__main__":

@@ -89,8 +89,15 @@ def test_stage_rewrites_every_path(tmp_path):
     out = str(tmp_path / ".device")
     stage.stage(jobs, out)
     staged = json.load(open(os.path.join(out, "jobs.json")))["jobs"]
-    for r in staged[0]["pools"]["synthetic"]:
+    from PIL import Image
+
+    for r, src in zip(staged[0]["pools"]["synthetic"], imgs):
         assert not os.path.isabs(r[0]) and os.path.isfile(os.path.join(out, "data", r[0]))
+        # the PNG render travels as a JPEG of stage.JPEG_QUALITY, the same picture
+        with Image.open(os.path.join(out, "data", r[0])) as im:
+            assert im.format == "JPEG" and r[0].endswith(".jpg")
+            got = np.asarray(im.convert("RGB"), np.float64)
+        assert np.abs(got - np.asarray(Image.open(src), np.float64)).mean() < 3.0
     assert os.path.isfile(os.path.join(out, "code", "bench", "sim2real", "remote.py"))
     assert os.path.isfile(os.path.join(out, "code", "python", "synthgen", "evaluate", "train.py"))
     old = stage.LIMIT
@@ -127,6 +134,54 @@ def test_remote_trains_with_the_core_stand_in(tmp_path):
     assert res["tiny"]["manifest"]["pools"]["synthetic"]["samples"] == 2
     assert "car/all" in res["tiny"]["scores"]
     assert os.path.isfile(out / "tiny.model")
+
+
+def test_remote_parallel_merges_results_and_packs_models(tmp_path):
+    """Two processes, three jobs: every job's result in results.json, the per-process files
+    gone, the models moved into tar files under the size asked for, each model once; a job's
+    weights do not depend on the number of processes (its batches depend on its seed alone)."""
+    pytest.importorskip("torch")
+    import tarfile
+
+    imgs = _tiny_images(tmp_path)
+    rows = [[os.path.basename(p), [[20, 10, 60, 40]], ["car"], [False]] for p in imgs]
+    jobs = {"jobs": [{"name": f"j{i}", "classes": ["car"], "mix": None,
+                      "options": {"steps": 2, "batch": 1, "size": [64, 96], "warmup": 1, "seed": i},
+                      "pools": {"synthetic": rows}} for i in range(3)]}
+    jf = tmp_path / "jobs.json"
+    jf.write_text(json.dumps(jobs))
+    env = dict(os.environ, SYNTHGEN_REMOTE_STANDIN="1")
+    outs = {}
+    for parallel in (1, 2):
+        out = tmp_path / f"out{parallel}"
+        out.mkdir()
+        r = subprocess.run([sys.executable, os.path.join(BENCH, "sim2real", "remote.py"), str(jf), "--root",
+                            str(tmp_path), "--out", str(out), "--device", "cpu", "--workers", "0", "--parallel",
+                            str(parallel), "--pack", "3"], env=env, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        assert sorted(json.load(open(out / "results.json"))) == ["j0", "j1", "j2"]
+        assert sorted(os.listdir(out))[-1] == "results.json" and not list(out.glob("results_*"))
+        members = {}
+        for t in sorted(out.glob("models_*.tar")):
+            assert os.path.getsize(t) <= 3 * 2**20
+            with tarfile.open(t) as tf:
+                for m in tf.getmembers():
+                    assert m.name not in members
+                    members[m.name] = tf.extractfile(m).read()
+        assert sorted(members) == ["j0.model", "j1.model", "j2.model"]
+        assert not list(out.glob("*.model")) and len(list(out.glob("models_*.tar"))) == 2
+        outs[parallel] = members
+    import io as _io
+
+    import torch
+
+    for name in outs[1]:
+        a = torch.load(_io.BytesIO(outs[1][name]), map_location="cpu")
+        b = torch.load(_io.BytesIO(outs[2][name]), map_location="cpu")
+        sa, sb = a["state_dict"], b["state_dict"]
+        for k in sa:
+            if hasattr(sa[k], "shape"):
+                assert torch.equal(sa[k], sb[k]), (name, k)
 
 
 @needs_shared
