@@ -65,6 +65,9 @@ BUDGETS: Dict[str, Dict[str, Any]] = {
                  plates=256, ablation_frames=128, ablation_seeds=(0, 1), spps=(4, 16, 64), steps=1000, batch=32,
                  test_every=1, bootstrap=1000, workers=8),
 }
+# the full budget's renders, trained on the CPU (300 steps of 8, ~5 min a job on 2 cores): a
+# figure without an accelerator, below the full budget's training
+BUDGETS["medium"] = dict(BUDGETS["full"], steps=300, batch=8, workers=0)
 
 #: Ablations: one knob of bench/sim2real/data.py changed from its default.
 ABLATIONS = {"base": {}, "no_wear": {"wear": False}, "no_shadow_catcher": {"shadow_catcher": False},

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -71,6 +72,7 @@ class TrainOptions:
     workers: int = 0                            #: data-loading processes (0: in this process)
     cache_bytes: int = 4 << 30                  #: decoded images kept in memory (per process)
     backbone: Optional[str] = None              #: ImageNet weights of the backbone
+    threads: int = 0                            #: PyTorch threads on the CPU (0: every CPU usable)
 
     def describe(self) -> Dict[str, Any]:
         return {"steps": self.steps, "batch": self.batch, "lr": self.lr, "weight_decay": self.weight_decay,
@@ -256,6 +258,12 @@ def train(pools: Mapping[str, Sequence[Any]], class_names: Sequence[str], option
     else:
         loader = (data[t] for t in range(len(data)))
     model.to(o.device).train()
+    threads = torch.get_num_threads()
+    if o.device == "cpu":
+        # NOTE: PyTorch defaults to one thread per physical core (one on a 2-vCPU machine); with
+        # every usable CPU a CPU run trains ~2.7x faster there (300 steps of 8: 272 s against 749 s)
+        usable = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+        torch.set_num_threads(o.threads or usable)
     opt = torch.optim.AdamW(model.parameters(), lr=o.lr, weight_decay=o.weight_decay)
     bar = None
     if progress:
@@ -287,6 +295,7 @@ def train(pools: Mapping[str, Sequence[Any]], class_names: Sequence[str], option
                 log(f"step {step + 1}/{o.steps}: loss {parts['total']:.4f} (heat {parts['heat']:.4f}, "
                     f"size {parts['size']:.4f}, offset {parts['offset']:.4f})")
     finally:
+        torch.set_num_threads(threads)
         if bar is not None:
             bar.close()
     seconds = time.perf_counter() - start
