@@ -449,7 +449,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--cache", default=os.path.join(HERE, ".cache", "sim2real"))
     ap.add_argument("--models", default=None, help="trained models (default CACHE/models_BUDGET)")
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--jobs", default="", help="stage: the jobs to stage (names or fnmatch patterns, comma-separated)")
+    ap.add_argument("--jobs", default="", help="only these jobs (names or fnmatch patterns, comma-separated)")
     ap.add_argument("--groups", default=",".join(GROUPS),
                     help=f"the experiment groups to render, train and score (comma-separated, of {', '.join(GROUPS)})")
     ap.add_argument("--stage-to", default=os.path.join(REPO, ".device"), help="stage: the folder (git-ignored)")
@@ -469,14 +469,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         build_jobs(a.budget, a.cache, render_only=True, groups=groups)
         return 0
     jobs = build_jobs(a.budget, a.cache, groups=groups)
-    if a.phase == "stage":
+    names = [n for n in a.jobs.split(",") if n]
+    if names:
         import fnmatch
 
+        jobs = [j for j in jobs if any(fnmatch.fnmatchcase(j["name"], n) for n in names)]
+    if a.phase == "stage":
         from sim2real import stage
 
-        names = [n for n in a.jobs.split(",") if n]
-        stage.stage([j for j in jobs if not names or any(fnmatch.fnmatchcase(j["name"], n) for n in names)],
-                    os.path.abspath(a.stage_to))
+        stage.stage(jobs, os.path.abspath(a.stage_to))
         return 0
     if a.phase == "all":
         train_local(jobs, models, a.device, BUDGETS[a.budget]["workers"])

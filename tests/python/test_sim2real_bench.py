@@ -198,3 +198,29 @@ def test_report_prints_every_key_of_the_issue(tmp_path):
                                             "plain_light", "one_paint", "one_car", "spp4", "spp16", "spp64"]}
     want |= {f"ablation_{n}_render_cpu_s" for n in ["base", "spp4", "spp64"]}
     assert want <= keys, sorted(want - keys)
+
+
+@needs_shared
+def test_unknown_group_is_refused_before_any_render(tmp_path):
+    r = subprocess.run([sys.executable, os.path.join(BENCH, "sim2real.py"), "--budget", "small", "--phase", "render",
+                        "--groups", "car,cars", "--cache", str(tmp_path / "cache")], capture_output=True, text=True,
+                       env=dict(os.environ, PYTHONPATH=os.path.join(REPO, "python")))
+    assert r.returncode == 2 and "unknown group(s) ['cars']" in r.stderr, r.stderr
+    assert not os.path.exists(tmp_path / "cache" / "inserted")
+
+
+def test_unpack_extracts_models_and_refuses_other_members(tmp_path):
+    import tarfile
+
+    b = _bench()
+    (tmp_path / "a.model").write_bytes(b"A")
+    with tarfile.open(tmp_path / "models_0.tar", "w") as tf:
+        tf.add(tmp_path / "a.model", arcname="a.model")
+    (tmp_path / "a.model").unlink()
+    b.unpack(str(tmp_path))
+    assert (tmp_path / "a.model").read_bytes() == b"A"
+    with tarfile.open(tmp_path / "models_1.tar", "w") as tf:
+        tf.add(tmp_path / "a.model", arcname="../evil.model")
+    with pytest.raises(SystemExit, match="not a model file"):
+        b.unpack(str(tmp_path))
+    assert not (tmp_path.parent / "evil.model").exists()
