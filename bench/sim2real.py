@@ -65,7 +65,7 @@ BUDGETS: Dict[str, Dict[str, Any]] = {
                  plates=256, ablation_frames=128, ablation_seeds=(0, 1), spps=(4, 16, 64), steps=1000, batch=32,
                  test_every=1, bootstrap=1000, workers=8),
 }
-# the full budget's renders, trained on the CPU (300 steps of 8, ~5 min a job on 2 cores): a
+# the full budget's renders, trained on the CPU (300 steps of 8, ~4 min a job on 2 cores): a
 # figure without an accelerator, below the full budget's training
 BUDGETS["medium"] = dict(BUDGETS["full"], steps=300, batch=8, workers=0)
 

@@ -192,7 +192,8 @@ def _parallel(a) -> int:
 
 def pack(out: str, mib: float) -> List[str]:
     """Moves ``out``'s ``*.model`` files into ``models_K.tar`` files of at most ``mib`` MiB each
-    (in name order); returns the tar files."""
+    (in name order; a model larger than that gets a tar of its own), numbered after any tars
+    already there (a second pack never overwrites the first); returns the new tar files."""
     import tarfile
 
     models = sorted(f for f in os.listdir(out) if f.endswith(".model"))
@@ -206,7 +207,8 @@ def pack(out: str, mib: float) -> List[str]:
         groups[-1].append(m)
         size += n
     tars = []
-    for k, g in enumerate(groups):
+    first = len([f for f in os.listdir(out) if f.startswith("models_") and f.endswith(".tar")])
+    for k, g in enumerate(groups, start=first):
         t = os.path.join(out, f"models_{k}.tar")
         with tarfile.open(t, "w") as tf:
             for m in g:

@@ -224,3 +224,16 @@ def test_unpack_extracts_models_and_refuses_other_members(tmp_path):
     with pytest.raises(SystemExit, match="not a model file"):
         b.unpack(str(tmp_path))
     assert not (tmp_path.parent / "evil.model").exists()
+
+
+def test_pack_numbers_new_tars_after_existing_ones(tmp_path):
+    from sim2real import remote
+
+    (tmp_path / "a.model").write_bytes(b"A" * 100)
+    assert [os.path.basename(t) for t in remote.pack(str(tmp_path), 1)] == ["models_0.tar"]
+    (tmp_path / "b.model").write_bytes(b"B" * 100)
+    assert [os.path.basename(t) for t in remote.pack(str(tmp_path), 1)] == ["models_1.tar"]
+    import tarfile
+
+    with tarfile.open(tmp_path / "models_0.tar") as tf:
+        assert tf.getnames() == ["a.model"]

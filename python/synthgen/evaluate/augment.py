@@ -69,11 +69,12 @@ class Augment:
 def resize(image: np.ndarray, rows: int, cols: int) -> np.ndarray:
     """``image`` (H x W x 3 uint8) resampled to ``rows`` x ``cols``: bilinear, antialiased when
     shrinking (Pillow's ``BILINEAR``, whose filter widens with the reduction; within 1 of
-    PyTorch's ``interpolate(antialias=True)`` and 2-3 times faster on uint8, which matters: the
-    data workers, not the GPU, bound training on the accelerator)."""
+    PyTorch's ``interpolate(antialias=True)`` and 1.6-2.3 times faster on a 676 x 380 frame
+    scaled by 0.8-1.25, which matters: the data workers, not the GPU, bound training on the
+    accelerator)."""
     if image.shape[:2] == (rows, cols):
         return image
-    from PIL import Image
+    from PIL import Image  # lazily, as the package's other Pillow users (a module lookup per call)
 
     return np.asarray(Image.fromarray(np.ascontiguousarray(image)).resize((cols, rows), Image.BILINEAR))
 
