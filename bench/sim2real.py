@@ -73,6 +73,11 @@ BUDGETS["medium"] = dict(BUDGETS["full"], steps=300, batch=8, workers=0)
 ABLATIONS = {"base": {}, "no_wear": {"wear": False}, "no_shadow_catcher": {"shadow_catcher": False},
              "no_camera_match": {"camera_match": False}, "no_denoise": {"denoise": False},
              "plain_light": {"lighting": "plain"}, "one_paint": {"paint_variety": False}, "one_car": {"vehicles": "one"}}
+#: What each ablation changes (the table's words).
+ABLATION_TEXT = {"base": "every knob at its default", "no_wear": "no wear", "no_shadow_catcher": "no shadow catcher",
+                 "no_camera_match": "no camera matching", "no_denoise": "no denoising",
+                 "plain_light": "plain light in place of sky/HDR", "one_paint": "one paint",
+                 "one_car": "one car in place of the library", "spp4": "4 spp", "spp16": "16 spp", "spp64": "64 spp"}
 
 #: Mixing policies: the real frames' share is fixed (half of each batch).
 MIX_REAL = {"real": 0.5, "negative": 0.5}
@@ -266,6 +271,8 @@ def build_jobs(budget: str, cache: str, render_only: bool = False,
                 abl[(name, seed)] = render_inserted(cache, f"ablation {name}", b["ablation_frames"], bg,
                                                     seed=100 + seed, spp=b["spp"], **knobs)
         for spp in b["spps"]:
+            if spp == b["spp"]:
+                continue    # = base (the same scenario text): one render, one model; the report aliases it
             for seed in b["ablation_seeds"]:
                 abl[(f"spp{spp}", seed)] = render_inserted(cache, f"ablation spp {spp}", b["ablation_frames"], bg,
                                                            seed=100 + seed, spp=spp)
@@ -386,7 +393,7 @@ def _f(x: float) -> str:
     return "nan" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.3f}"
 
 
-def report(budget: str, cache: str, rows: Dict[str, Any], seconds: float) -> None:
+def report(budget: str, cache: str, rows: Dict[str, Any], seconds: float, figure: Optional[str] = None) -> None:
     b = BUDGETS[budget]
 
     def ap(name: str, key: str) -> None:
@@ -427,15 +434,24 @@ def report(budget: str, cache: str, rows: Dict[str, Any], seconds: float) -> Non
     if os.path.isfile(cpath):
         with open(cpath) as f:
             costs = json.load(f)
+    from sim2real import ablations
+
     names = list(ABLATIONS) + [f"spp{s}" for s in b["spps"]]
-    for name in names:
-        vals = [rows[f"ablation_{name}_s{s}"].ap50 for s in b["ablation_seeds"] if f"ablation_{name}_s{s}" in rows]
-        cs = [costs[f"ablation_{name}_s{s}"] for s in b["ablation_seeds"] if f"ablation_{name}_s{s}" in costs]
-        frames = sum(c["frames"] for c in cs)
-        cpu = sum(c["cpu_s"] for c in cs) / frames if frames else float("nan")   # nan: not measured
-        print(f"ablation_{name}_ap50={_f(float(np.mean(vals))) if vals else 'nan'}")
-        print(f"ablation_{name}_ap50_seeds=[{', '.join(_f(v) for v in vals)}]")
-        print(f"ablation_{name}_render_cpu_s={_f(cpu)}")
+    abl = ablations.table(rows, costs, names, b["ablation_seeds"], aliases={f"spp{b['spp']}": "base"})
+    for a in abl:
+        print(f"ablation_{a.name}_ap50={_f(a.ap50)}")
+        print(f"ablation_{a.name}_ap50_ci=[{_f(a.ap50_ci[0])}, {_f(a.ap50_ci[1])}]")
+        print(f"ablation_{a.name}_ap50_seeds=[{', '.join(_f(v) for v in a.seeds)}]")
+        if a.name != "base":
+            print(f"ablation_{a.name}_delta={_f(a.delta)}")
+            print(f"ablation_{a.name}_delta_ci=[{_f(a.delta_ci[0])}, {_f(a.delta_ci[1])}]")
+            print(f"ablation_{a.name}_effect={a.effect.replace(' ', '_')}")
+        print(f"ablation_{a.name}_render_cpu_s={_f(a.cpu_s)}")
+    if any(a.seeds for a in abl):
+        say("ablations (" + budget + " budget):\n" + ablations.markdown(abl, ABLATION_TEXT))
+        if figure:
+            ablations.figure(abl, figure, f"{budget} budget: car AP50 (seed mean, 95% interval) against render cost")
+            say(f"wrote {figure}")
     for name in ("inserted", "pure", "augment"):
         c = costs.get(name)
         print(f"render_cpu_s_per_frame_{name}=" + (_f(c["cpu_s"] / c["frames"]) if c and c["frames"] else "nan"))
@@ -452,6 +468,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     ap.add_argument("--jobs", default="", help="only these jobs (names or fnmatch patterns, comma-separated)")
     ap.add_argument("--groups", default=",".join(GROUPS),
                     help=f"the experiment groups to render, train and score (comma-separated, of {', '.join(GROUPS)})")
+    ap.add_argument("--figure", default=None,
+                    help="report: write the ablations' AP50 against render cost here (docs/sim2real.png)")
     ap.add_argument("--stage-to", default=os.path.join(REPO, ".device"), help="stage: the folder (git-ignored)")
     a = ap.parse_args(argv)
     if not os.path.isfile(os.path.join(HIGHWAY, "boxes.csv")):
@@ -482,7 +500,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if a.phase == "all":
         train_local(jobs, models, a.device, BUDGETS[a.budget]["workers"])
     rows = score_models(a.budget, models, jobs)
-    report(a.budget, a.cache, rows, time.time() - start)
+    report(a.budget, a.cache, rows, time.time() - start, a.figure)
     return 0
 
 

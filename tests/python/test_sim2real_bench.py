@@ -5,6 +5,7 @@ stand-in for synthgen's compiled core (the machine has none), and the report pri
 of issue 34 even where an experiment has no model yet."""
 from __future__ import annotations
 
+import dataclasses
 import glob
 import importlib.util
 import io
@@ -197,6 +198,7 @@ def test_report_prints_every_key_of_the_issue(tmp_path):
     want |= {f"ablation_{n}_ap50" for n in ["no_wear", "no_shadow_catcher", "no_camera_match", "no_denoise",
                                             "plain_light", "one_paint", "one_car", "spp4", "spp16", "spp64"]}
     want |= {f"ablation_{n}_render_cpu_s" for n in ["base", "spp4", "spp64"]}
+    want |= {f"ablation_{n}_{k}" for n in ["no_wear", "spp64"] for k in ("delta", "delta_ci", "effect")}
     assert want <= keys, sorted(want - keys)
 
 
@@ -237,3 +239,51 @@ def test_pack_numbers_new_tars_after_existing_ones(tmp_path):
 
     with tarfile.open(tmp_path / "models_0.tar") as tf:
         assert tf.getnames() == ["a.model"]
+
+
+def _row(ap50, boot):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(ap50=ap50, ap50_boot=np.asarray(boot, float))
+
+
+def test_ablation_table_pairs_the_bootstrap_and_needs_seeds_apart(tmp_path):
+    from sim2real import ablations
+
+    rng = np.random.default_rng(0)
+    noise = rng.normal(0, 0.02, 400)        # the shared resamples: the same images in every model's draw b
+    rows = {"ablation_base_s0": _row(0.50, 0.50 + noise), "ablation_base_s1": _row(0.54, 0.54 + noise),
+            # paired: every resample 0.1 lower, seeds below the reference's range -> lower
+            "ablation_worse_s0": _row(0.41, 0.41 + noise), "ablation_worse_s1": _row(0.43, 0.43 + noise),
+            # the seeds overlap the reference's -> no effect, however tight the interval
+            "ablation_same_s0": _row(0.49, 0.49 + noise), "ablation_same_s1": _row(0.52, 0.52 + noise),
+            # seeds apart but the unpaired noise swamps it -> no effect
+            "ablation_noisy_s0": _row(0.56, 0.56 + rng.normal(0, 0.3, 400)),
+            "ablation_noisy_s1": _row(0.57, 0.57 + rng.normal(0, 0.3, 400)),
+            "ablation_better_s0": _row(0.60, 0.60 + noise)}
+    costs = {"ablation_base_s0": {"frames": 10, "cpu_s": 30.0}, "ablation_base_s1": {"frames": 30, "cpu_s": 50.0}}
+    t = {a.name: a for a in ablations.table(rows, costs, ["base", "worse", "same", "noisy", "better", "missing",
+                                                          "spp16"], [0, 1], aliases={"spp16": "base"})}
+    assert t.pop("spp16") == dataclasses.replace(t["base"], name="spp16")
+    assert t["base"].effect == "reference" and t["base"].ap50 == pytest.approx(0.52)
+    assert t["base"].cpu_s == pytest.approx(2.0)               # (30 + 50) / (10 + 30) frames
+    lo, hi = t["base"].ap50_ci
+    assert lo < 0.52 < hi and hi - lo == pytest.approx(np.percentile(noise, 97.5) - np.percentile(noise, 2.5))
+    w = t["worse"]
+    assert w.effect == "lower" and w.delta == pytest.approx(-0.10)
+    assert w.delta_ci == pytest.approx((-0.10, -0.10))        # paired: the shared noise cancels exactly
+    assert t["same"].effect == "no effect" and t["same"].delta_ci[1] < 0
+    assert t["noisy"].effect == "no effect" and t["noisy"].delta_ci[0] < 0 < t["noisy"].delta_ci[1]
+    assert t["better"].effect == "higher" and t["better"].seeds == [0.60]
+    assert t["missing"].effect == "not measured" and np.isnan(t["missing"].ap50) and np.isnan(t["missing"].cpu_s)
+    md = ablations.markdown(list(t.values()), {"worse": "a knob off"})
+    assert "| `worse` | a knob off | 0.420 [" in md and "| -0.100 [-0.100, -0.100] | lower | nan |" in md
+    assert md.count("\n") == 2 + 6
+    assert ablations.figure(ablations.table(rows, {}, ["base", "worse"], [0, 1]), str(tmp_path / "a.png")) is None
+    assert not os.path.exists(tmp_path / "a.png")               # no render cost: no point to draw
+    costs.update({"ablation_worse_s0": {"frames": 5, "cpu_s": 50.0}})
+    png = ablations.figure(ablations.table(rows, costs, ["base", "worse"], [0, 1]), str(tmp_path / "a.png"))
+    from PIL import Image
+
+    with Image.open(png) as im:
+        assert im.size == (768, 528)
