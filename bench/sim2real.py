@@ -470,6 +470,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     help=f"the experiment groups to render, train and score (comma-separated, of {', '.join(GROUPS)})")
     ap.add_argument("--figure", default=None,
                     help="report: write the ablations' AP50 against render cost here (docs/sim2real.png)")
+    ap.add_argument("--split", action="store_true",
+                    help="stage: pack the jobs into STAGE_TO/part0, part1, ... (one device call each)")
     ap.add_argument("--stage-to", default=os.path.join(REPO, ".device"), help="stage: the folder (git-ignored)")
     a = ap.parse_args(argv)
     if not os.path.isfile(os.path.join(HIGHWAY, "boxes.csv")):
@@ -495,7 +497,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if a.phase == "stage":
         from sim2real import stage
 
-        stage.stage(jobs, os.path.abspath(a.stage_to))
+        stage.stage(jobs, os.path.abspath(a.stage_to), split=a.split)
         return 0
     if a.phase == "all":
         train_local(jobs, models, a.device, BUDGETS[a.budget]["workers"])

@@ -110,6 +110,46 @@ def test_stage_rewrites_every_path(tmp_path):
         stage.LIMIT = old
 
 
+def test_stage_split_packs_jobs_into_parts_under_the_limit(tmp_path):
+    imgs = _tiny_images(tmp_path, 3)
+
+    def job(name, paths):
+        return {"name": name, "classes": ["car"], "mix": None, "options": {"steps": 1, "batch": 1},
+                "pools": {"synthetic": [[p, [[20, 10, 60, 40]], ["car"], [False]] for p in paths]}}
+
+    jobs = [job("a", imgs[:2]), job("b", imgs[1:3]), job("c", imgs[1:2])]
+    out = str(tmp_path / ".device")
+    probe = stage._Folder(str(tmp_path / "probe"), stage.JPEG_QUALITY)
+    base = probe.size
+    probe.add(jobs[0])
+    one = probe.size - base                       # job a: two images and its row
+    old = stage.LIMIT
+    stage.LIMIT = base + one + one // 3           # room for a, not for a and b's one new image
+    try:
+        parts = stage.stage(jobs, out, split=True)
+    finally:
+        stage.LIMIT = old
+    assert parts == [os.path.join(out, "part0"), os.path.join(out, "part1")]
+    names = []
+    for p in parts:
+        staged = json.load(open(os.path.join(p, "jobs.json")))["jobs"]
+        names += [j["name"] for j in staged]
+        used = {r[0] for j in staged for r in j["pools"]["synthetic"]}
+        have = {os.path.relpath(os.path.join(dp, f), os.path.join(p, "data"))
+                for dp, _, fs in os.walk(os.path.join(p, "data")) for f in fs}
+        assert used == have                       # every file a job reads, and no other (the undo removed its file)
+        assert os.path.isfile(os.path.join(p, "code", "bench", "sim2real", "remote.py"))
+        assert sum(os.path.getsize(os.path.join(dp, f)) for dp, _, fs in os.walk(p) for f in fs) <= \
+            base + one + one // 3
+    assert names == ["a", "b", "c"]               # in order; c shares part1 with b
+    stage.LIMIT = 10
+    try:
+        with pytest.raises(SystemExit, match="job a alone is"):
+            stage.stage(jobs, out, split=True)
+    finally:
+        stage.LIMIT = old
+
+
 def test_remote_trains_with_the_core_stand_in(tmp_path):
     pytest.importorskip("torch")
     imgs = _tiny_images(tmp_path)
