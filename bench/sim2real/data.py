@@ -213,11 +213,18 @@ def write_scenario(out_dir, frames=None, *, n=None, seed=0, spp=16, labels_csv=N
     return path
 
 
+#: Part of every render's cache key beside its texts: changed when synthgen's photo path changes
+#: what a frame of the same scenario holds, so that no stale frame is reused (the run manifest
+#: records synthgen's version, not its code). "2": camera matching fits the photo's noise over
+#: the whole photo where it is flat (the foliage-as-noise fit speckled the cars).
+RENDER_REV = "2"
+
+
 def _text_hash(scn_dir):
     """Hash of the scenario's and calibrations' texts, the scenario's `count:` line left out:
     frame k depends only on k (photos in turn, per-frame seeds), so a longer render of the same
     scenario continues the shorter one's frames."""
-    h = hashlib.sha256()
+    h = hashlib.sha256(b"rev\0" + RENDER_REV.encode() + b"\0")
     for rel in ["scenario.yaml", "rig.yaml"] + sorted(
             os.path.join("cal", x) for x in os.listdir(os.path.join(scn_dir, "cal"))):
         with open(os.path.join(scn_dir, rel), "rb") as f:

@@ -29,6 +29,28 @@ def test_poisson_gaussian_noise_is_recovered(a, b):
     assert f["a"] == pytest.approx(a, rel=0.15) and f["b"] == pytest.approx(b, rel=0.15)
 
 
+def test_noise_is_measured_where_the_photo_is_flat_not_in_its_texture():
+    """A street photo: fine texture (foliage: independent 1-2 pixel blobs, far stronger than
+    the noise) over the top two thirds, a flat shaded road below, one noise over all. The fit
+    is the noise's, not the texture's: within 20 % on the whole photo, and the foliage alone
+    (the photo with the road left out, as when inserted objects cover it) reads it as noise
+    several times larger, which is why camera matching fits the whole photo."""
+    rng = np.random.default_rng(4)
+    h, w, sigma = 300, 480, 0.004
+    ys, xs = np.mgrid[0:h, 0:w]
+    clean = 0.45 + 0.1 * xs / w + 0.05 * ys / h
+    blobs = gaussian_blur(rng.standard_normal((h, w)), 0.8)
+    clean[:200] = np.clip(0.25 + 0.12 * blobs[:200] / blobs[:200].std() + 0.2 * (ys[:200] < 60), 0.03, 0.97)
+    photo = np.clip(clean + rng.standard_normal((h, w)) * sigma, 0.0, 1.0)
+    f = fit_noise(photo)
+    for level in (0.3, 0.5):
+        assert np.sqrt(f["a"] * level + f["b"]) == pytest.approx(sigma, rel=0.2)
+    top = np.zeros((h, w), bool)
+    top[:200] = True
+    ft = fit_noise(photo, top)
+    assert np.sqrt(ft["a"] * 0.3 + ft["b"]) > 3 * sigma
+
+
 @pytest.mark.parametrize("sigma", [0.7, 1.3, 2.2])
 def test_blur_is_recovered(sigma):
     sharp = np.full((200, 220), 0.1)
@@ -270,25 +292,33 @@ def test_the_noise_loop_is_deterministic():
 def test_noise_the_jpeg_removes_entirely_means_more_gain_not_done():
     """At quality 75 the JPEG removes all of the noise the photo's model adds (half a code value):
     the written object measures 0. That is far too little noise (the gain is raised until the
-    written noise is the photo's), never "converged" with clean objects in the frame."""
+    written noise is the photo's), never "converged" with clean objects in the frame.
+
+    Over 9 draws: the written noise is measured with the robust estimate, which on what is left
+    (mostly constant 8-bit values with sparse one-code-value flips) jumps by ~25 % as a few
+    flips cross its clipping threshold, so one draw may read 1.28 where its neighbours read
+    1.0; the median of the draws is the photo's within 10 %, every draw within 35 %."""
     from synthgen.post.photo.measure import noise_sigma
 
     photo, comp, ids, albedo, normal = _photo_with_two_objects()
-    out, info = match_camera(photo, comp, ids > 0, np.random.default_rng(3), jpeg_quality=75, blur=False,
-                             synthetic=(ids > 0).astype(np.float32), ids=ids, albedo=albedo, normal=normal)
-    written = np.round(srgb(out) * 255) / 255
-    fit = info["noise"]
-    got = []
-    for sl in ((slice(72, 148), slice(56, 88)), (slice(104, 184), slice(216, 248))):  # 12+ pixels from edges
-        inside = np.zeros(ids.shape, bool)
-        inside[sl] = True
-        s, level = noise_sigma(written, inside)
-        got.append(s / np.sqrt(fit["a"] * level + fit["b"]))
-    print(f"\nloop {info['noise_loop_worst_error']}, gains {info['noise_gain_per_object']}, written noise / "
-          f"photo's {got[0]:.3f}, {got[1]:.3f}; unmatched {info.get('unmatched')}")
-    assert info["noise_loop_worst_error"][0] == 1.0  # the first round's: nothing survived
-    for i, r in zip((1, 2), got):
-        if i in info.get("unmatched", {}):
-            assert info["unmatched"][i][0]["error"] >= 0.03
-        else:
-            assert info["noise_loop_error_per_object"][i] < 0.03 and r == pytest.approx(1.0, abs=0.1)
+    got = {1: [], 2: []}
+    for seed in range(3, 12):
+        out, info = match_camera(photo, comp, ids > 0, np.random.default_rng(seed), jpeg_quality=75, blur=False,
+                                 synthetic=(ids > 0).astype(np.float32), ids=ids, albedo=albedo, normal=normal)
+        written = np.round(srgb(out) * 255) / 255
+        fit = info["noise"]
+        assert info["noise_loop_worst_error"][0] == 1.0  # the first round's: nothing survived
+        for i, sl in zip((1, 2), ((slice(72, 148), slice(56, 88)), (slice(104, 184), slice(216, 248)))):
+            inside = np.zeros(ids.shape, bool)   # 12+ pixels from edges
+            inside[sl] = True
+            s, level = noise_sigma(written, inside)
+            if i in info.get("unmatched", {}):
+                assert info["unmatched"][i][0]["error"] >= 0.03
+            else:
+                assert info["noise_loop_error_per_object"][i] < 0.03
+                got[i].append(s / np.sqrt(fit["a"] * level + fit["b"]))
+    print(f"\nwritten noise / photo's over 9 draws: {got}")
+    for i in (1, 2):
+        assert len(got[i]) >= 7
+        assert float(np.median(got[i])) == pytest.approx(1.0, abs=0.1)
+        assert all(abs(r - 1.0) < 0.35 for r in got[i])

@@ -24,7 +24,6 @@ from typing import Any, Dict, List, Mapping, Optional, Tuple
 
 import numpy as np
 
-from ..post.photo.composite import influence_mask
 from ..post.photo.measure import dilate, fit_noise, srgb
 from ..post.quality import estimate_noise
 
@@ -128,10 +127,9 @@ def refine_objects(scene: Any, res: Any, fp: Any, camera: Any, settings: Mapping
     objects = [int(o) for o in np.unique(ids[whole])]
     if not objects or not fraction > 0:
         return res, info
-    # The photo's noise (sRGB, fitted where the objects change nothing: as camera matching
-    # fits it) and the render's exposure into the photo's linear units (as the composite's).
-    influence = influence_mask(res)
-    fit = fit_noise(srgb(fp.pixels), ~dilate(influence, 3))
+    # The photo's noise (sRGB, over the whole photo, as camera matching fits it) and the
+    # render's exposure into the photo's linear units (as the composite's).
+    fit = fit_noise(srgb(fp.pixels))
     boxes = []
     for o in objects:
         ys, xs = np.nonzero(ids == o)
