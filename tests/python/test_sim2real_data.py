@@ -231,3 +231,13 @@ def test_tiny_render_cache_and_post_steps(tmp_path):
     assert len(sg.read_dataset(d)) == 2
     assert np.array_equal(np.asarray(Image.open(os.path.join(d, "images", "000000.png")).convert("RGB")), rendered)
     assert len(sg.read_dataset(data.render(str(cache), 2, photos, **dict(kw, paste_control=True)))) == 2
+
+
+def test_render_cache_key_holds_the_render_revision_not_the_count(tmp_path, monkeypatch):
+    photos = _photos(tmp_path)
+    data.write_scenario(str(tmp_path / "a"), photos, n=3, seed=5, spp=4)
+    data.write_scenario(str(tmp_path / "b"), photos, n=7, seed=5, spp=4)
+    key = data._text_hash(str(tmp_path / "a"))
+    assert data._text_hash(str(tmp_path / "b")) == key          # a longer render continues the shorter one
+    monkeypatch.setattr(data, "RENDER_REV", data.RENDER_REV + "x")
+    assert data._text_hash(str(tmp_path / "a")) != key          # frames of an older synthgen are not reused
