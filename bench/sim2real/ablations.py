@@ -39,11 +39,10 @@ class Ablation:
 
 
 def _interval(x: np.ndarray, confidence: float) -> Tuple[float, float]:
-    x = x[~np.isnan(x)]
-    if not len(x):
-        return (math.nan, math.nan)
-    a = (1 - confidence) / 2 * 100
-    return (float(np.percentile(x, a)), float(np.percentile(x, 100 - a)))
+    """The central ``confidence`` interval of resamples ``x`` (nan ones left out), as scoring's."""
+    from synthgen.evaluate.score import _interval as percentile_interval
+
+    return percentile_interval(x, (1 - confidence) / 2 * 100)
 
 
 def _mean_boot(rows: Sequence[Any]) -> Optional[np.ndarray]:
@@ -134,6 +133,11 @@ def figure(abl: Sequence[Ablation], path: str, title: str = "") -> Optional[str]
         ax.errorbar([a.cpu_s], [a.ap50], yerr=err, fmt="o", color=c, capsize=3, ms=5)
         ax.annotate(a.name, (a.cpu_s, a.ap50), textcoords="offset points", xytext=(5, 4), fontsize=7, color=c)
     ax.set_xscale("log")
+    from matplotlib.ticker import FormatStrFormatter
+
+    ax.xaxis.set_major_formatter(FormatStrFormatter("%g"))   # 4, 6, 10: not 4 x 10^0
+    ax.xaxis.set_minor_formatter(FormatStrFormatter("%g"))
+    ax.margins(x=0.12)   # room for the rightmost point's name
     ax.set_xlabel("render CPU seconds per frame (log)")
     ax.set_ylabel("car AP50 on the real test frames")
     ax.grid(alpha=0.3, which="both")

@@ -18,7 +18,7 @@ import hashlib
 import json
 import os
 import shutil
-from typing import Any, Dict, List, Tuple
+from typing import Any, Dict, List
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.abspath(os.path.join(HERE, "..", ".."))
@@ -88,7 +88,8 @@ class _Folder:
             os.remove(os.path.join(self.data, self.names.pop(p)))
             del self.sizes[p]
 
-    def close(self) -> Tuple[int, int]:
+    def close(self) -> int:
+        """Writes jobs.json and prints the device command; returns the folder's size (bytes)."""
         with open(os.path.join(self.out, "jobs.json"), "w") as f:
             json.dump({"jobs": self.jobs}, f)
         size = sum(os.path.getsize(os.path.join(dp, f)) for dp, _, fs in os.walk(self.out) for f in fs)
@@ -97,7 +98,7 @@ class _Folder:
               f"on the accelerator:\n  python3 {rel_out}/code/bench/sim2real/remote.py {rel_out}/jobs.json "
               f"--root {rel_out}/data --out $OUT --device cuda --workers 15 --parallel 3 --pack 15   "
               f"(carry: {rel_out})")
-        return size, len(self.jobs)
+        return size
 
 
 def stage(jobs: List[Dict[str, Any]], out: str, jpeg: int = JPEG_QUALITY, split: bool = False) -> List[str]:
@@ -107,7 +108,7 @@ def stage(jobs: List[Dict[str, Any]], out: str, jpeg: int = JPEG_QUALITY, split:
         f = _Folder(out, jpeg)
         for j in jobs:
             f.add(j)
-        size, _ = f.close()
+        size = f.close()
         if size > LIMIT:
             raise SystemExit(f"sim2real stage: {size / 2**20:.1f} MiB is more than one call carries "
                              f"({LIMIT / 2**20:.0f} MiB): stage fewer jobs (--jobs) or split them (--split)")

@@ -244,7 +244,8 @@ def match_camera(photo: np.ndarray, composite: np.ndarray, influence: np.ndarray
     # NOTE: the photo's noise is fitted over the whole photo: the insertion changed none of its
     # pixels, and leaving out what the objects and their shadows cover (often most of the road,
     # the flattest part of a street photo) left foliage and sky edges, whose texture the fit
-    # took for noise 5 to 10 times the photo's (a speckled car on a clean road).
+    # took for noise 15 times the photo's (0.0307 against 0.0021, sRGB, on one dusk road photo:
+    # a speckled car on a clean road).
     fit = fit_noise(p_enc) if noise else {"a": 0.0, "b": 0.0}
     ys_, xs_ = np.nonzero(grow)
     if len(ys_) == 0:
